@@ -1,0 +1,64 @@
+// The organized scan: an H x W panorama (rows = elevation, columns = azimuth) in the scanner's
+// own frame, with its pose. SPEC §1.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/common/expected.h"
+
+namespace scanreg {
+
+// Angular geometry of a panoramic grid: the azimuth of each column and the elevation of each
+// row, in radians, in the scanner frame (azimuth = atan2(y, x), elevation = atan2(z, |xy|)).
+// Empty when unknown (e.g. a triangulation range grid); then the line of sight of a valid cell
+// is the direction to its point.
+struct AngularGrid {
+  std::vector<float> azimuth;    // one per column
+  std::vector<float> elevation;  // one per row
+  bool empty() const { return azimuth.empty() || elevation.empty(); }
+};
+
+// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid). Points stay local to the
+// scanner (float is plenty within a few km); the pose is double, so UTM-sized coordinates keep
+// their precision.
+struct Scan {
+  std::string name;
+  int rows = 0;  // elevation
+  int cols = 0;  // azimuth
+  std::vector<Eigen::Vector3f> points;  // rows*cols, row-major, metres, scanner frame
+  std::vector<float> reflectance;       // rows*cols, nominally [0, 1]
+  std::vector<std::uint8_t> valid;      // rows*cols, 1 where the cell holds a return
+  AngularGrid angles;
+  Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+  std::optional<Eigen::Isometry3d> reference_world_from_scan;  // ground truth / survey control
+
+  Scan() = default;
+  Scan(std::string scan_name, int num_rows, int num_cols);
+
+  std::size_t size() const { return points.size(); }
+  std::size_t Index(int row, int col) const { return static_cast<std::size_t>(row) * cols + col; }
+  bool IsValid(int row, int col) const { return valid[Index(row, col)] != 0; }
+  const Eigen::Vector3f& Point(int row, int col) const { return points[Index(row, col)]; }
+  float Reflectance(int row, int col) const { return reflectance[Index(row, col)]; }
+  void Set(int row, int col, const Eigen::Vector3f& p, float refl);
+  void Clear(int row, int col);
+
+  std::size_t CountValid() const;
+  // Unit line of sight of a cell, scanner frame: from the angular grid when known, else the
+  // direction to the cell's point (zero vector for an empty cell without angles).
+  Eigen::Vector3f LineOfSight(int row, int col) const;
+  // Checks that the arrays agree with rows x cols and that every valid point is finite.
+  Status Validate() const;
+};
+
+// Fills scan.angles from the valid points: the median azimuth of each column and the median
+// elevation of each row; columns/rows without a valid point are interpolated from neighbours.
+// Does nothing (returns false) for grids that are not panoramic (too few valid cells).
+bool EstimateAngularGrid(Scan& scan);
+
+}  // namespace scanreg
