@@ -1,0 +1,5 @@
+#include "tests/bench/bench_table.h"
+
+namespace scanreg::bench {
+void RunSimulateBench(Table&, bool) {}  // filled by the simulator work
+}  // namespace scanreg::bench

@@ -1,0 +1,42 @@
+// The benchmark's output: one table of figures, printed at the end. Sections add rows.
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace scanreg::bench {
+
+struct Row {
+  std::string section;  // e.g. "io", "simulate"
+  std::string what;     // e.g. "PTX read 2.25 M points"
+  double value = 0.0;
+  std::string unit;     // e.g. "M points/s"
+  std::string note;     // baseline, data size, ...
+};
+
+class Table {
+ public:
+  void Add(Row row) { rows_.push_back(std::move(row)); }
+  void Print() const;
+
+ private:
+  std::vector<Row> rows_;
+};
+
+// Wall-clock seconds of a callable.
+template <typename F>
+double Seconds(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Peak resident set size of this process so far, in MiB (from /proc/self/status VmHWM).
+double PeakMemoryMiB();
+
+// Sections. Each takes the table and a "quick" flag (smaller sizes for a smoke run).
+void RunIoBench(Table& table, bool quick);
+void RunSimulateBench(Table& table, bool quick);
+
+}  // namespace scanreg::bench
