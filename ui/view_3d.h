@@ -1,0 +1,36 @@
+// The 3D view: a QVTKOpenGLNativeWidget with a renderer, an orientation marker and a grid.
+#pragma once
+
+#include <QWidget>
+#include <vtkSmartPointer.h>
+
+class QVTKOpenGLNativeWidget;
+class vtkGenericOpenGLRenderWindow;
+class vtkOrientationMarkerWidget;
+class vtkRenderer;
+
+namespace scanreg::ui {
+
+class View3d : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit View3d(QWidget* parent = nullptr);
+  ~View3d() override;
+
+  vtkRenderer* renderer() const;
+  QVTKOpenGLNativeWidget* vtkWidget() const { return widget_; }
+  // Number of actors (clouds, meshes, markers) in the scene; the orientation marker is not one.
+  int PropCount() const;
+  void ResetCamera();
+  // Grabs the rendered frame buffer as an image (empty on failure).
+  QImage GrabImage();
+
+ private:
+  QVTKOpenGLNativeWidget* widget_ = nullptr;
+  vtkSmartPointer<vtkGenericOpenGLRenderWindow> render_window_;
+  vtkSmartPointer<vtkRenderer> renderer_;
+  vtkSmartPointer<vtkOrientationMarkerWidget> marker_;
+};
+
+}  // namespace scanreg::ui
