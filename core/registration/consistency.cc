@@ -1,0 +1,23 @@
+#include "core/registration/consistency.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace scanreg {
+
+std::vector<int> ConsistentIndices(const std::vector<Correspondence3d>& correspondences,
+                                   const Eigen::Isometry3d& parent_from_child, double threshold_m) {
+  std::vector<int> out;
+  const double t2 = threshold_m * threshold_m;
+  for (std::size_t i = 0; i < correspondences.size(); ++i) {
+    const auto& c = correspondences[i];
+    if ((c.parent - parent_from_child * c.child).squaredNorm() <= t2) out.push_back(static_cast<int>(i));
+  }
+  return out;
+}
+
+double ConsistencyThreshold(double range_sigma_m, double k, double floor_m) {
+  return std::max(k * std::sqrt(2.0) * std::abs(range_sigma_m), floor_m);
+}
+
+}  // namespace scanreg

@@ -1,0 +1,30 @@
+// Nearest-neighbour index over a fixed 3D point set (a k-d tree; PCL's FLANN tree kept private so
+// that callers do not pay PCL's compile time). Queries are const and thread-safe.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+namespace scanreg {
+
+class PointIndex {
+ public:
+  explicit PointIndex(const std::vector<Eigen::Vector3d>& points);
+  ~PointIndex();
+  PointIndex(const PointIndex&) = delete;
+  PointIndex& operator=(const PointIndex&) = delete;
+
+  std::size_t size() const { return size_; }
+  // Index of the nearest point within max_distance_m (-1 if none); squared distance in *d2.
+  int Nearest(const Eigen::Vector3d& query, double max_distance_m, double* d2 = nullptr) const;
+  // Indices of the k nearest points (fewer if the set is smaller), nearest first.
+  std::vector<int> KNearest(const Eigen::Vector3d& query, int k) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::size_t size_ = 0;
+};
+
+}  // namespace scanreg

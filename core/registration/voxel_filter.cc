@@ -1,0 +1,56 @@
+#include "core/registration/voxel_filter.h"
+
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+namespace scanreg {
+namespace {
+
+struct VoxelKey {
+  std::int64_t x, y, z;
+  bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+struct VoxelKeyHash {
+  std::size_t operator()(const VoxelKey& k) const {
+    // Teschner et al. 2003 spatial hash.
+    return static_cast<std::size_t>((static_cast<std::uint64_t>(k.x) * 73856093u) ^
+                                    (static_cast<std::uint64_t>(k.y) * 19349663u) ^
+                                    (static_cast<std::uint64_t>(k.z) * 83492791u));
+  }
+};
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points, double voxel_m) {
+  std::vector<Eigen::Vector3d> out;
+  if (!(voxel_m > 0.0)) {
+    for (const auto& p : points)
+      if (p.allFinite()) out.push_back(p);
+    return out;
+  }
+  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> slot;
+  slot.reserve(points.size() / 4 + 16);
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  const double inv = 1.0 / voxel_m;
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const VoxelKey key{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                       static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    auto [it, inserted] = slot.try_emplace(key, sum.size());
+    if (inserted) {
+      sum.push_back(p);
+      count.push_back(1);
+    } else {
+      sum[it->second] += p;
+      ++count[it->second];
+    }
+  }
+  out.resize(sum.size());
+  for (std::size_t i = 0; i < sum.size(); ++i) out[i] = sum[i] / count[i];
+  return out;
+}
+
+}  // namespace scanreg

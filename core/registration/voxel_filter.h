@@ -1,0 +1,14 @@
+// Voxel-grid downsampling: one point (the centroid) per occupied cube of side voxel_m.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace scanreg {
+
+// Centroids of the points in each occupied voxel (cubes aligned to the frame's origin), in the order
+// in which the voxels are first hit. voxel_m <= 0 returns the finite input points unchanged.
+// Non-finite points are skipped.
+std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points, double voxel_m);
+
+}  // namespace scanreg

@@ -1,0 +1,25 @@
+// Test helper: an organized scan made by casting the rays of a panoramic scanner into a closed
+// box-shaped room with a few box-shaped blocks (no dependency on core/simulate).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "core/geometry/scan.h"
+
+namespace scanreg::testing {
+
+struct AxisBox {
+  Eigen::Vector3d min, max;
+};
+
+// A 12 x 8 x 3 m room with four blocks that break its symmetries.
+AxisBox DefaultRoom();
+std::vector<AxisBox> DefaultBlocks();
+
+// rows x cols panorama (elevation -60..+60°, azimuth over the full turn), scanner at
+// world_from_scan; points in the scanner frame; every ray hits (closed room).
+Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, const AxisBox& room,
+                  const std::vector<AxisBox>& blocks);
+
+}  // namespace scanreg::testing
