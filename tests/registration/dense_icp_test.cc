@@ -19,11 +19,14 @@ Eigen::Isometry3d StationPose(double x, double y, double z, double yaw_deg) {
   return p;
 }
 
-TEST(DenseIcp, RecoversSmallOffsetInARoom) {
+class DenseIcpNoise : public ::testing::TestWithParam<double> {};
+
+TEST_P(DenseIcpNoise, RecoversSmallOffsetInARoom) {
+  const double sigma = GetParam();  // range noise, metres
   const auto room = testing::DefaultRoom();
   const auto blocks = testing::DefaultBlocks();
-  const Scan parent = testing::CastRoomScan(StationPose(-1.0, 0.0, 1.5, 0.0), kRows, kCols, room, blocks);
-  const Scan child = testing::CastRoomScan(StationPose(1.2, -0.5, 1.3, 25.0), kRows, kCols, room, blocks);
+  const Scan parent = testing::CastRoomScan(StationPose(-1.0, 0.0, 1.5, 0.0), kRows, kCols, room, blocks, sigma, 1);
+  const Scan child = testing::CastRoomScan(StationPose(1.2, -0.5, 1.3, 25.0), kRows, kCols, room, blocks, sigma, 2);
   const Eigen::Isometry3d truth = parent.world_from_scan.inverse() * child.world_from_scan;
   // Initial guess off by 20 cm and 2°.
   Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
@@ -37,14 +40,17 @@ TEST(DenseIcp, RecoversSmallOffsetInARoom) {
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_TRUE(r.ok()) << r.error().ToString();
   const PoseError e = ComparePoses(r->parent_from_child, truth);
-  std::printf("    dense ICP: %.3f mm, %.4f deg, %d iterations, %d correspondences, overlap %.3f, rms %.2f mm, %.0f ms\n",
-              e.position_m * 1e3, e.angle_rad * 180.0 / kPi, r->iterations, r->correspondences, r->overlap,
+  std::printf("    dense ICP, sigma %.0f mm: %.3f mm, %.4f deg, %d iterations, %d correspondences, overlap %.3f, rms %.2f mm, %.0f ms\n",
+              sigma * 1e3, e.position_m * 1e3, e.angle_rad * 180.0 / kPi, r->iterations, r->correspondences, r->overlap,
               r->rms_m * 1e3, ms);
   EXPECT_LT(e.position_m, 0.005);
   EXPECT_LT(e.angle_rad * 180.0 / kPi, 0.05);
   EXPECT_TRUE(r->converged);
   EXPECT_GT(r->overlap, 0.8);
 }
+
+// Noise-free, and W's scanner noise (12 mm).
+INSTANTIATE_TEST_SUITE_P(Sigma, DenseIcpNoise, ::testing::Values(0.0, 0.012));
 
 TEST(DenseIcp, OverlapOfIdenticalAndDistantScans) {
   const Scan scan = testing::CastRoomScan(StationPose(0.0, 0.0, 1.5, 0.0), kRows / 2, kCols / 2,

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 namespace scanreg::testing {
 namespace {
@@ -41,7 +42,9 @@ std::vector<AxisBox> DefaultBlocks() {
 }
 
 Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, const AxisBox& room,
-                  const std::vector<AxisBox>& blocks) {
+                  const std::vector<AxisBox>& blocks, double range_sigma_m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, range_sigma_m > 0.0 ? range_sigma_m : 1.0);
   Scan scan("room", rows, cols);
   scan.world_from_scan = world_from_scan;
   const double el_max = 60.0 * kPi / 180.0;
@@ -62,6 +65,7 @@ Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, 
         if (t_in <= t_out && t_in > 1e-6 && t_in < t) t = t_in;
       }
       if (!std::isfinite(t) || t <= 0.0) continue;
+      if (range_sigma_m > 0.0) t += noise(rng);
       scan.Set(r, c, (d_scan * t).cast<float>(), 0.5f);
     }
   }

@@ -18,8 +18,9 @@ AxisBox DefaultRoom();
 std::vector<AxisBox> DefaultBlocks();
 
 // rows x cols panorama (elevation -60..+60°, azimuth over the full turn), scanner at
-// world_from_scan; points in the scanner frame; every ray hits (closed room).
+// world_from_scan; points in the scanner frame; every ray hits (closed room). range_sigma_m adds
+// Gaussian range noise along each ray (seeded, reproducible).
 Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, const AxisBox& room,
-                  const std::vector<AxisBox>& blocks);
+                  const std::vector<AxisBox>& blocks, double range_sigma_m = 0.0, unsigned seed = 1);
 
 }  // namespace scanreg::testing
