@@ -1,0 +1,102 @@
+#include "core/io/atomic_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+namespace scanreg::io {
+
+namespace {
+constexpr std::size_t kBufferBytes = 4 << 20;
+std::atomic<unsigned> g_counter{0};
+}  // namespace
+
+AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+  temp_ = target_;
+  temp_ += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
+}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_) {
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+  }
+}
+
+Status AtomicFile::Fail(const std::string& what) {
+  const std::string reason = std::strerror(errno);
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  return MakeError(ErrorCode::kIoError, target_.string() + ": cannot " + what + " (" + reason +
+                                            "); check that the folder exists, is writable and has free space");
+}
+
+Status AtomicFile::Open() {
+  fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) return Fail("create a temporary file beside it");
+  buffer_.reserve(kBufferBytes);
+  return Status::Ok();
+}
+
+Status AtomicFile::Flush() {
+  const char* p = buffer_.data();
+  std::size_t left = buffer_.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd_, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return Fail("write");
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  buffer_.clear();
+  return Status::Ok();
+}
+
+Status AtomicFile::Write(std::string_view bytes) {
+  if (fd_ < 0) return MakeError(ErrorCode::kIoError, target_.string() + ": write to a file that is not open");
+  buffer_.append(bytes);
+  if (buffer_.size() >= kBufferBytes) return Flush();
+  return Status::Ok();
+}
+
+Status AtomicFile::CloseForExternalWriter() {
+  if (fd_ >= 0) {
+    if (Status s = Flush(); !s) return s;
+    ::close(fd_);
+    fd_ = -1;
+  }
+  return Status::Ok();
+}
+
+Status AtomicFile::Commit() {
+  if (fd_ < 0) {
+    fd_ = ::open(temp_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) return Fail("reopen the temporary file");
+  } else if (Status s = Flush(); !s) {
+    return s;
+  }
+  if (::fsync(fd_) != 0) return Fail("flush to disk");
+  if (::close(fd_) != 0) {
+    fd_ = -1;
+    return Fail("close");
+  }
+  fd_ = -1;
+  if (::rename(temp_.c_str(), target_.c_str()) != 0) return Fail("rename the temporary file over it");
+  committed_ = true;
+  std::filesystem::path dir = target_.parent_path();
+  if (dir.empty()) dir = ".";
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  return Status::Ok();
+}
+
+}  // namespace scanreg::io

@@ -1,0 +1,32 @@
+// Pose files: Stanford .conf, scanreg poses JSON, CloudCompare 4x4 matrix .txt.
+// All poses are world_from_scan (p_world = T p_scan), metres.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/common/expected.h"
+
+namespace scanreg::io {
+
+struct NamedPose {
+  std::string scan;  // scan or file name as written in the pose file
+  Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+};
+
+// Stanford `.conf`: `bmesh <file> tx ty tz qx qy qz qw` lines; `camera` lines (viewer settings),
+// blank lines and `#` comments are ignored. Verified convention (realdata README):
+// p_world = R(q)^T p + t with q = (qx, qy, qz, qw) as written.
+Expected<std::vector<NamedPose>> ReadBunConf(const std::filesystem::path& path);
+
+// {"version":1,"poses":[{"scan":"name","world_from_scan":[16 numbers, row-major]}]}
+Expected<std::vector<NamedPose>> ReadPosesJson(const std::filesystem::path& path);
+Status WritePosesJson(const std::filesystem::path& path, const std::vector<NamedPose>& poses);  // atomic
+
+// CloudCompare-style matrix file: 4 lines of 4 numbers, row-major.
+Expected<Eigen::Isometry3d> ReadMatrixTxt(const std::filesystem::path& path);
+Status WriteMatrixTxt(const std::filesystem::path& path, const Eigen::Isometry3d& world_from_scan);  // atomic
+
+}  // namespace scanreg::io

@@ -1,0 +1,57 @@
+#include "core/io/scan_file.h"
+
+#include "core/io/pcd.h"
+#include "core/io/ply.h"
+#include "core/io/ptx.h"
+#include "core/io/text_parse.h"
+
+namespace scanreg::io {
+
+const char* SupportedScanExtensions() { return ".ptx, .ply, .pcd"; }
+
+namespace {
+
+Error UnknownExtension(const std::filesystem::path& path) {
+  const std::string ext = path.extension().string();
+  return MakeError(ErrorCode::kUnsupported, path.string() + ": unknown scan file type " +
+                                                (ext.empty() ? "(no extension)" : "'" + ext + "'") +
+                                                "; supported: " + SupportedScanExtensions());
+}
+
+Expected<std::vector<Scan>> One(Expected<Scan> scan) {
+  if (!scan) return scan.error();
+  std::vector<Scan> scans;
+  scans.push_back(std::move(*scan));
+  return scans;
+}
+
+}  // namespace
+
+Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, ProgressSink& progress,
+                                         const CancelToken& cancel) {
+  const std::string ext = LowerExtension(path);
+  if (ext != ".ptx" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    return MakeError(ErrorCode::kNotFound, path.string() + ": no such file; check the path");
+  }
+  if (ext == ".ptx") return ReadPtx(path, progress, cancel);
+  if (ext == ".ply") return One(ReadPly(path, progress, cancel));
+  return One(ReadPcd(path, progress, cancel));
+}
+
+Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
+                     const CancelToken& cancel) {
+  const std::string ext = LowerExtension(path);
+  if (ext != ".ptx" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
+  if (ext == ".ptx") return WritePtx(path, scans, progress, cancel);
+  if (scans.size() != 1) {
+    return MakeError(ErrorCode::kInvalidArgument, path.string() + ": a " + ext + " file holds one scan, but " +
+                                                      std::to_string(scans.size()) +
+                                                      " were given; write a .ptx file or one file per scan");
+  }
+  if (ext == ".ply") return WritePly(path, scans[0], progress, cancel);
+  return WritePcd(path, scans[0], progress, cancel);
+}
+
+}  // namespace scanreg::io

@@ -1,0 +1,24 @@
+// Reading and writing scans by file extension: .ptx (several scans), .ply and .pcd (one scan).
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+
+namespace scanreg::io {
+
+// Extensions are matched case-insensitively. A scan with no valid point is read without error
+// (check Scan::CountValid(); the policy is the caller's).
+Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, ProgressSink& progress,
+                                         const CancelToken& cancel);
+
+Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
+                     const CancelToken& cancel);
+
+// "Supported: .ptx, .ply, .pcd" — for messages and file dialogs.
+const char* SupportedScanExtensions();
+
+}  // namespace scanreg::io

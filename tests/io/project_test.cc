@@ -1,0 +1,125 @@
+#include "core/io/project.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tests/support/test_paths.h"
+
+namespace scanreg::io {
+namespace {
+
+void Touch(const std::filesystem::path& p) { std::ofstream(p) << "x"; }
+
+Project TwoScanProject(const test::TempDir& dir) {
+  std::filesystem::create_directories(dir / "scans");
+  Touch(dir / "scans" / "a.ptx");
+  Touch(dir / "scans" / "b.ptx");
+  Project p;
+  ProjectScan a, b;
+  a.name = "a";
+  a.path = dir / "scans" / "a.ptx";
+  a.registered = true;
+  b.name = "b";
+  b.path = dir / "scans" / "b.ptx";
+  b.world_from_scan.translation() << 500000.123456, 5800000.654321, 12.5;  // UTM-sized, must keep sub-mm
+  b.world_from_scan.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  b.reference_world_from_scan = b.world_from_scan;
+  b.parent_override = "a";
+  p.scans = {a, b};
+  LinkRecord link;
+  link.parent = "a";
+  link.child = "b";
+  link.status = LinkStatus::kWeak;
+  link.reason = "only 9 inliers";
+  link.ransac_inliers = 9;
+  link.rms_m = 0.0123;
+  p.links.push_back(link);
+  p.root = "a";
+  p.settings["coarse"] = "3d";
+  return p;
+}
+
+TEST(ProjectTest, RoundTripKeepsEverythingWithRelativePaths) {
+  test::TempDir dir;
+  const Project p = TwoScanProject(dir);
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  std::ifstream in(dir / "p.scanreg.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"scans/a.ptx\""), std::string::npos) << "paths are stored relative to the project";
+  EXPECT_EQ(text.find(dir.path().string()), std::string::npos);
+
+  Expected<Project> q = LoadProject(dir / "p.scanreg.json");
+  ASSERT_TRUE(q.ok()) << q.error().ToString();
+  ASSERT_EQ(q->scans.size(), 2u);
+  EXPECT_EQ(q->scans[1].path, dir / "scans" / "b.ptx");
+  EXPECT_LT((q->scans[1].world_from_scan.translation() - p.scans[1].world_from_scan.translation()).norm(), 1e-7);
+  EXPECT_TRUE(q->scans[1].world_from_scan.linear().isApprox(p.scans[1].world_from_scan.linear(), 1e-12));
+  ASSERT_TRUE(q->scans[1].reference_world_from_scan.has_value());
+  EXPECT_EQ(q->scans[1].parent_override.value_or(""), "a");
+  EXPECT_TRUE(q->scans[0].registered);
+  EXPECT_FALSE(q->scans[1].registered);
+  ASSERT_EQ(q->links.size(), 1u);
+  EXPECT_EQ(q->links[0].status, LinkStatus::kWeak);
+  EXPECT_EQ(q->links[0].reason, "only 9 inliers");
+  EXPECT_EQ(q->links[0].ransac_inliers, 9);
+  EXPECT_DOUBLE_EQ(q->links[0].rms_m, 0.0123);
+  EXPECT_EQ(q->root.value_or(""), "a");
+  EXPECT_EQ(q->settings.at("coarse"), "3d");
+}
+
+TEST(ProjectTest, MissingScanFileIsAClearError) {
+  test::TempDir dir;
+  ASSERT_TRUE(SaveProject(TwoScanProject(dir), dir / "p.scanreg.json").ok());
+  std::filesystem::remove(dir / "scans" / "b.ptx");
+  Expected<Project> q = LoadProject(dir / "p.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(q.error().message.find("b.ptx"), std::string::npos);
+  EXPECT_NE(q.error().message.find("scan 'b'"), std::string::npos);
+}
+
+TEST(ProjectTest, UnknownSchemaVersionAndGarbageAreClearErrors) {
+  test::TempDir dir;
+  std::ofstream(dir / "future.scanreg.json") << R"({"schema_version": 99, "scans": []})";
+  Expected<Project> q = LoadProject(dir / "future.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().code, ErrorCode::kUnsupported);
+  EXPECT_NE(q.error().message.find("99"), std::string::npos);
+
+  std::ofstream(dir / "garbage.scanreg.json") << "{ not json";
+  q = LoadProject(dir / "garbage.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().code, ErrorCode::kParseError);
+
+  EXPECT_EQ(LoadProject(dir / "absent.scanreg.json").error().code, ErrorCode::kNotFound);
+}
+
+TEST(ProjectTest, NonRigidPoseAndDuplicateNamesAreRejected) {
+  test::TempDir dir;
+  Touch(dir / "a.ptx");
+  std::ofstream(dir / "shear.scanreg.json")
+      << R"({"schema_version":1,"scans":[{"name":"a","path":"a.ptx","world_from_scan":[1,0.5,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]})";
+  Expected<Project> q = LoadProject(dir / "shear.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_NE(q.error().message.find("rigid"), std::string::npos);
+  std::ofstream(dir / "dup.scanreg.json")
+      << R"({"schema_version":1,"scans":[{"name":"a","path":"a.ptx"},{"name":"a","path":"a.ptx"}]})";
+  EXPECT_FALSE(LoadProject(dir / "dup.scanreg.json").ok());
+}
+
+TEST(ProjectTest, SaveIsAtomicAndLeavesNoTemporaryFiles) {
+  test::TempDir dir;
+  const Project p = TwoScanProject(dir);
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+  // Saving into a folder that does not exist fails without creating anything.
+  EXPECT_FALSE(SaveProject(p, dir / "missing" / "p.scanreg.json").ok());
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+}
+
+}  // namespace
+}  // namespace scanreg::io
