@@ -1,0 +1,94 @@
+#include "core/simulate/project_sim.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/simulate/random.h"
+
+namespace scanreg {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+double SpanOf(const SimulatedProjectOptions& o) { return (o.stations - 1) * o.spacing_m; }
+
+// The scene the project scans: the street is lengthened to hold every station with 30 m to spare.
+SceneOptions ProjectScene(const SimulatedProjectOptions& o) {
+  SceneOptions s = o.scene;
+  s.street_length_m = std::max(s.street_length_m, SpanOf(o) + 60.0);
+  s.far_site = s.far_site || o.add_far_station;
+  return s;
+}
+
+Eigen::Isometry3d StationPose(sim::Rng& rng, const Eigen::Vector3d& position, double max_tilt_rad) {
+  const double heading = rng.Uniform(-M_PI, M_PI);
+  const double tilt_axis = rng.Uniform(-M_PI, M_PI), tilt = max_tilt_rad * std::sqrt(rng.Uniform());
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = position;
+  pose.linear() = (Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(tilt_axis), std::sin(tilt_axis), 0.0)) *
+                   Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()))
+                      .toRotationMatrix();
+  return pose;
+}
+
+}  // namespace
+
+Status SimulatedProjectOptions::Validate() const {
+  if (stations < 1 || stations > 200)
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: " + std::to_string(stations) + " stations; use between 1 and 200");
+  if (!(spacing_m >= 0.5 && spacing_m <= 50.0))
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: station spacing " + std::to_string(spacing_m) + " m is outside [0.5, 50] m");
+  if (!(max_tilt_deg >= 0.0 && max_tilt_deg <= 20.0))
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: max tilt " + std::to_string(max_tilt_deg) + "° is outside [0, 20]°");
+  if (SpanOf(*this) > 900.0)
+    return MakeError(ErrorCode::kInvalidArgument, "project: stations span " + std::to_string(SpanOf(*this)) +
+                                                      " m; reduce the stations or the spacing (max 900 m)");
+  if (Status s = scanner.Validate(); !s) return s;
+  return scene.Validate();
+}
+
+std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptions& o) {
+  sim::Rng rng(sim::Hash(o.seed, 0x57a7));
+  const double lateral = std::min(1.5, 0.2 * o.spacing_m);
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < o.stations; ++i) {
+    const double x = (i - 0.5 * (o.stations - 1)) * o.spacing_m + rng.Uniform(-0.1, 0.1) * o.spacing_m;
+    const Eigen::Vector3d position(x, rng.Uniform(-lateral, lateral), rng.Uniform(1.5, 2.0));
+    poses.push_back(StationPose(rng, position, o.max_tilt_deg * kDeg));
+  }
+  if (o.add_far_station) {
+    const Eigen::Vector3d c = FarSiteCenter();
+    poses.push_back(StationPose(rng, c + Eigen::Vector3d(rng.Uniform(-3, 3), rng.Uniform(-3, 3), 1.7),
+                                o.max_tilt_deg * kDeg));
+  }
+  return poses;
+}
+
+Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
+                                            const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  progress.Report(0.0, "building the scene");
+  const Scene scene = MakeScene(ProjectScene(options));
+  const std::vector<Eigen::Isometry3d> poses = SimulatedStationPoses(options);
+  std::vector<Scan> scans;
+  scans.reserve(poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "project simulation cancelled");
+    char name[32];
+    std::snprintf(name, sizeof(name), "s%02zu", i + 1);
+    ScannerOptions scanner = options.scanner;
+    scanner.seed = sim::Hash(options.scanner.seed, options.seed, i);
+    const double n = static_cast<double>(poses.size());
+    SubProgress sub(progress, i / n, (i + 1) / n);
+    Expected<Scan> scan = SimulateScan(scene, poses[i], scanner, name, sub, cancel);
+    if (!scan) return scan.error();
+    scans.push_back(std::move(scan).value());
+  }
+  return scans;
+}
+
+}  // namespace scanreg

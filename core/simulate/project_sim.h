@@ -1,0 +1,36 @@
+// A simulated scan project: stations along the street of MakeScene, as a surveyor would place them
+// (W §1: 11 upright scans ~5 m apart). Scans arrive unregistered (world_from_scan = Identity); the
+// true poses are their reference poses.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/simulate/scanner.h"
+#include "core/simulate/scene.h"
+
+namespace scanreg {
+
+struct SimulatedProjectOptions {
+  int stations = 11;         // scans along the street
+  double spacing_m = 5.0;    // metres between consecutive stations (before jitter)
+  ScannerOptions scanner;    // per-scan noise seed is derived from scanner.seed, seed and the station
+  SceneOptions scene;        // street length is extended when the stations need more room
+  std::uint64_t seed = 1;    // station positions, headings, tilts and per-scan noise
+  double max_tilt_deg = 0.5;  // degrees: random tilt of each station from upright
+  bool add_far_station = false;  // one extra station at a separate site > 1 km away (no overlap)
+
+  Status Validate() const;
+};
+
+// Scans named "s01", "s02", ... in station order along +x; the far station, if any, comes last.
+Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
+                                            const CancelToken& cancel);
+
+// The true scanner poses SimulateProject uses (no scanning), in the same order.
+std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptions& options);
+
+}  // namespace scanreg

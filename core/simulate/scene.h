@@ -1,0 +1,102 @@
+// Synthetic scenes of analytic primitives for the TLS simulator: rectangles (ground, walls),
+// oriented boxes (buildings, cars, kiosks), vertical cylinders (poles, trunks, bins). Each surface
+// carries an albedo texture of its surface coordinates. World frame: z up, metres; the street of
+// MakeScene runs along x with its centre line on y = 0 and the ground at z = 0.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/simulate/texture.h"
+
+namespace scanreg {
+
+class Scene {
+ public:
+  struct Hit {
+    double range = 0.0;        // metres along the (unit) ray
+    Eigen::Vector3d normal;    // unit, facing the ray origin
+    double albedo = 0.0;       // [0, 1] from the surface texture
+    int primitive = -1;        // index in the order of Add* calls
+  };
+
+  int AddTexture(const SurfaceTexture& texture);
+  // Rectangle centred at `center`, spanned by unit orthogonal axes u and v, half sizes in metres.
+  // Texture coordinates: (offset along u, offset along v) from the centre.
+  int AddRectangle(const Eigen::Vector3d& center, const Eigen::Vector3d& u_axis, const Eigen::Vector3d& v_axis,
+                   double half_u, double half_v, int texture);
+  // Box with its bottom at center.z - half.z, rotated by yaw (radians) about z. Faces in the order
+  // +x, -x, +y, -y, +z, -z (box frame). Side-face texture coordinates: (horizontal offset from the
+  // face's left edge seen from outside, height above the box's bottom); top/bottom: (x, y) offsets.
+  int AddBox(const Eigen::Vector3d& center, const Eigen::Vector3d& half_extents, double yaw_rad,
+             const std::array<int, 6>& face_textures);
+  int AddBox(const Eigen::Vector3d& center, const Eigen::Vector3d& half_extents, double yaw_rad, int texture);
+  // Vertical cylinder with a top cap. Texture coordinates: (arc length, height above z_min).
+  int AddCylinder(const Eigen::Vector2d& center_xy, double radius, double z_min, double z_max, int texture);
+
+  // Builds the bounding-volume hierarchy; call after the last Add* and before Intersect.
+  void Build();
+
+  // First surface hit by the ray origin + t * dir, 0 < t <= max_range; dir must be unit length.
+  // Thread-safe once built.
+  std::optional<Hit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range) const;
+  // The same by testing every primitive (reference for tests).
+  std::optional<Hit> IntersectBruteForce(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                         double max_range) const;
+
+  int num_primitives() const { return static_cast<int>(prims_.size()); }
+  const Eigen::AlignedBox3d& primitive_bounds(int i) const { return prims_[i].bounds; }
+
+ private:
+  enum class Kind : std::uint8_t { kRectangle, kBox, kCylinder };
+  struct Primitive {
+    Kind kind;
+    Eigen::Vector3d center;
+    Eigen::Matrix3d axes;       // rectangle: columns u, v, n; box: rotation (box -> world)
+    Eigen::Vector3d half;       // rectangle: (hu, hv, 0); box: half extents; cylinder: (r, z_min, z_max)
+    std::array<int, 6> texture;
+    Eigen::AlignedBox3d bounds;
+  };
+  struct Node {
+    Eigen::AlignedBox3d bounds;
+    int left = -1, right = -1;  // children (inner node)
+    int first = 0, count = 0;   // range in order_ (leaf when count > 0)
+  };
+
+  // Ray-primitive test; on a hit closer than *t_best updates it and the hit's face/coords.
+  bool HitPrimitive(int index, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t_best, int* face,
+                    Eigen::Vector2d* uv, Eigen::Vector3d* normal) const;
+  std::optional<Hit> MakeHit(int index, double t, int face, const Eigen::Vector2d& uv, const Eigen::Vector3d& normal,
+                             const Eigen::Vector3d& dir) const;
+  int BuildNode(int first, int count);
+
+  std::vector<SurfaceTexture> textures_;
+  std::vector<Primitive> prims_;
+  std::vector<Node> nodes_;
+  std::vector<int> order_;
+};
+
+struct SceneOptions {
+  enum class Kind {
+    kStreet,           // varied buildings, textures, poles, cars, kiosks, benches; some uniform surfaces
+    kRepeatedWindows,  // identical façades with identical window grids, little distinctive texture
+  };
+  Kind kind = Kind::kStreet;
+  std::uint64_t seed = 1;
+  double street_length_m = 100.0;  // length of the built-up street along x, centred on x = 0
+  double street_half_width_m = 9.0;  // distance from the centre line to the nearest façades
+  bool far_site = false;  // also build a separate cluster of buildings around FarSiteCenter()
+
+  Status Validate() const;
+};
+
+// Centre (on the ground) of the far site: > 1 km from the street, beyond any scanner's range.
+Eigen::Vector3d FarSiteCenter();
+
+Scene MakeScene(const SceneOptions& options);
+
+}  // namespace scanreg

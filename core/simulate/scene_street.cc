@@ -1,0 +1,308 @@
+// MakeScene: the street and repeated-window scenes, and the far site. Layout (world frame, z up):
+// the street runs along x over [-L/2, L/2]; road |y| < W - 3.5, sidewalks up to the façades at
+// |y| >= W; a closing building at each end; the far site is a courtyard around FarSiteCenter().
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/simulate/random.h"
+#include "core/simulate/scene.h"
+
+namespace scanreg {
+namespace {
+
+using sim::Rng;
+using Vec3 = Eigen::Vector3d;
+
+struct Builder {
+  Scene& scene;
+  Rng& rng;
+  bool repeated;  // kRepeatedWindows: identical, plain façades
+
+  std::uint64_t Seed() { return rng.Next(); }
+
+  SurfaceTexture Facade(double width, double height, bool textured) {
+    SurfaceTexture t;
+    t.seed = Seed();
+    t.base = static_cast<float>(rng.Uniform(0.35, 0.75));
+    if (textured) {
+      t.noise_amplitude = static_cast<float>(rng.Uniform(0.03, 0.07));
+      t.noise_wavelength_m = rng.Uniform(1.0, 4.0);
+      t.blob_contrast = static_cast<float>(rng.Uniform(0.06, 0.16));
+      t.blob_cell_m = 2.5;
+      t.blob_probability = 0.3;
+      t.blob_radius_m = 0.9;
+      t.stroke_contrast = static_cast<float>(rng.Uniform(0.08, 0.18));
+      t.stroke_probability = 0.15;
+      t.stroke_width_m = 0.04;
+    }
+    WindowGrid& w = t.windows;
+    w.enabled = true;
+    w.spacing_u = rng.Uniform(2.4, 3.6);
+    w.spacing_v = rng.Uniform(3.0, 3.5);
+    w.width = rng.Uniform(1.0, std::min(1.8, w.spacing_u - 0.6));
+    w.height = rng.Uniform(1.3, 1.9);
+    w.offset_u = 0.5 * (w.spacing_u - w.width);
+    w.offset_v = 0.9;
+    w.u_min = 0.8;
+    w.u_max = width - 0.8;
+    w.v_min = rng.Uniform(3.6, 4.6);  // ground floor without the grid
+    w.v_max = height - 0.8;
+    w.glass_albedo = static_cast<float>(rng.Uniform(0.06, 0.16));
+    w.frame_albedo = static_cast<float>(std::min(0.95, t.base + rng.Uniform(0.1, 0.3)));
+    w.frame_width = rng.Uniform(0.05, 0.12);
+    w.variation = textured ? 0.08f : 0.0f;
+    return t;
+  }
+
+  // Posters, signs, graffiti: dense high-contrast blobs and strokes.
+  SurfaceTexture Poster(float base) {
+    SurfaceTexture t;
+    t.seed = Seed();
+    t.base = base;
+    t.noise_amplitude = 0.05f;
+    t.noise_wavelength_m = 0.8;
+    t.blob_contrast = 0.3f;
+    t.blob_cell_m = 0.5;
+    t.blob_probability = 0.6;
+    t.blob_radius_m = 0.25;
+    t.stroke_contrast = 0.25f;
+    t.stroke_cell_m = 0.4;
+    t.stroke_probability = 0.5;
+    t.stroke_width_m = 0.02;
+    t.stroke_length_m = 0.35;
+    return t;
+  }
+
+  SurfaceTexture Noisy(float base, float amplitude, double wavelength) {
+    SurfaceTexture t;
+    t.seed = Seed();
+    t.base = base;
+    t.noise_amplitude = amplitude;
+    t.noise_wavelength_m = wavelength;
+    return t;
+  }
+
+  // A building whose street façade is face `facade` (box frame) of an axis-aligned box.
+  void Building(const Vec3& center, const Vec3& half, int facade, double facade_width, bool textured) {
+    const int front = scene.AddTexture(Facade(facade_width, 2.0 * half.z(), textured));
+    const int side = scene.AddTexture(SurfaceTexture::Uniform(static_cast<float>(rng.Uniform(0.3, 0.7))));
+    std::array<int, 6> faces;
+    faces.fill(side);
+    faces[facade] = front;
+    scene.AddBox(center, half, 0.0, faces);
+  }
+};
+
+SurfaceTexture GroundTexture(const SceneOptions& o, Rng& rng, bool repeated) {
+  SurfaceTexture t;
+  t.seed = rng.Next();
+  t.base = 0.22f;
+  t.noise_amplitude = repeated ? 0.01f : 0.06f;
+  t.noise_wavelength_m = 3.0;
+  t.noise_octaves = 4;
+  if (!repeated) {
+    t.blob_contrast = 0.07f;  // patches, stains, manhole covers
+    t.blob_cell_m = 3.0;
+    t.blob_probability = 0.35;
+    t.blob_radius_m = 1.2;
+    t.stroke_contrast = 0.12f;  // cracks, tar seams
+    t.stroke_cell_m = 2.5;
+    t.stroke_probability = 0.4;
+    t.stroke_width_m = 0.03;
+    t.stroke_length_m = 2.2;
+  }
+  t.ground.enabled = true;
+  t.ground.road_half_width = o.street_half_width_m - 3.5;
+  t.ground.sidewalk_outer = o.street_half_width_m + 0.3;
+  if (!repeated) {
+    t.ground.crosswalk_u[0] = rng.Uniform(-0.3, -0.05) * o.street_length_m;
+    t.ground.crosswalk_u[1] = rng.Uniform(0.1, 0.35) * o.street_length_m;
+  }
+  return t;
+}
+
+void StreetFurniture(const SceneOptions& o, Builder& b) {
+  Scene& s = b.scene;
+  Rng& rng = b.rng;
+  const double half_l = 0.5 * o.street_length_m, road = o.street_half_width_m - 3.5;
+  for (int side : {-1, 1}) {
+    // Lamp posts and tree trunks along the kerb.
+    for (double x = -half_l + rng.Uniform(2, 10); x < half_l; x += rng.Uniform(9, 16)) {
+      const double y = side * (road + rng.Uniform(0.5, 0.9));
+      if (rng.Chance(0.5)) {
+        const int metal = s.AddTexture(SurfaceTexture::Uniform(static_cast<float>(rng.Uniform(0.35, 0.6))));
+        const double h = rng.Uniform(6.0, 8.0);
+        s.AddCylinder({x, y}, rng.Uniform(0.07, 0.12), 0.0, h, metal);
+        s.AddBox(Vec3(x, y - side * 0.4, h - 0.1), Vec3(0.15, 0.4, 0.1), 0.0, metal);
+      } else {
+        const int bark = s.AddTexture(b.Noisy(static_cast<float>(rng.Uniform(0.25, 0.4)), 0.12f, 0.25));
+        s.AddCylinder({x, y}, rng.Uniform(0.15, 0.3), 0.0, rng.Uniform(3.0, 5.0), bark);
+      }
+    }
+    // Parked cars: body (clear of the ground) and cabin.
+    for (double x = -half_l + rng.Uniform(0, 6); x < half_l - 4; x += rng.Uniform(5.0, 9.0)) {
+      if (!rng.Chance(0.65)) continue;
+      const double y = side * (road - 1.2), yaw = rng.Uniform(-0.04, 0.04);
+      SurfaceTexture paint = b.Noisy(static_cast<float>(rng.Uniform(0.1, 0.9)), 0.02f, 1.0);
+      const int body = s.AddTexture(paint);
+      const int glass = s.AddTexture(SurfaceTexture::Uniform(0.08f));
+      s.AddBox(Vec3(x, y, 0.78), Vec3(2.2, 0.9, 0.45), yaw, body);
+      s.AddBox(Vec3(x - 0.2, y, 1.5), Vec3(1.15, 0.8, 0.27), yaw, {glass, glass, glass, glass, body, body});
+    }
+    // Sidewalk objects: kiosks and advertising columns (posters), benches, bins.
+    for (double x = -half_l + rng.Uniform(3, 10); x < half_l - 3; x += rng.Uniform(6, 14)) {
+      const double y = side * rng.Uniform(road + 1.8, o.street_half_width_m - 1.5);
+      const double u = rng.Uniform();
+      if (u < 0.25) {
+        const int poster = s.AddTexture(b.Poster(static_cast<float>(rng.Uniform(0.4, 0.7))));
+        const int roof = s.AddTexture(SurfaceTexture::Uniform(0.3f));
+        s.AddBox(Vec3(x, y, 1.35), Vec3(1.3, 1.0, 1.35), rng.Uniform(-0.3, 0.3),
+                 {poster, poster, poster, poster, roof, roof});
+      } else if (u < 0.45) {
+        s.AddCylinder({x, y}, 0.6, 0.0, 2.8, s.AddTexture(b.Poster(static_cast<float>(rng.Uniform(0.4, 0.7)))));
+      } else if (u < 0.75) {
+        const int wood = s.AddTexture(b.Noisy(0.45f, 0.08f, 0.3));
+        s.AddBox(Vec3(x, y, 0.23), Vec3(0.9, 0.22, 0.23), 0.0, wood);
+      } else {
+        s.AddCylinder({x, y}, 0.3, 0.0, 1.0, s.AddTexture(SurfaceTexture::Uniform(0.5f)));
+      }
+    }
+  }
+}
+
+void StreetBuildings(const SceneOptions& o, Builder& b) {
+  Scene& s = b.scene;
+  Rng& rng = b.rng;
+  const double half_l = 0.5 * o.street_length_m, w = o.street_half_width_m;
+  SurfaceTexture shared_facade;  // kRepeatedWindows: one façade for every building
+  if (b.repeated) shared_facade = b.Facade(20.0, 15.0, false);
+  for (int side : {-1, 1}) {
+    double x = -half_l - 5.0;
+    while (x < half_l + 5.0) {
+      const double width = b.repeated ? 20.0 : std::min(rng.Uniform(10.0, 24.0), half_l + 5.0 - x);
+      if (width < 4.0) break;
+      const double depth = b.repeated ? 12.0 : rng.Uniform(10.0, 16.0);
+      const double height = b.repeated ? 15.0 : rng.Uniform(9.0, 24.0);
+      const double setback = b.repeated ? w : w + rng.Uniform(0.0, 1.5);
+      const Vec3 center(x + 0.5 * width, side * (setback + 0.5 * depth), 0.5 * height);
+      const Vec3 half(0.5 * width, 0.5 * depth, 0.5 * height);
+      const int facade = side > 0 ? 3 : 2;  // the face looking at the street
+      if (b.repeated) {
+        const int front = s.AddTexture(shared_facade), plain = s.AddTexture(SurfaceTexture::Uniform(0.55f));
+        std::array<int, 6> faces;
+        faces.fill(plain);
+        faces[facade] = front;
+        s.AddBox(center, half, 0.0, faces);
+        x += width;
+        continue;
+      }
+      b.Building(center, half, facade, width, rng.Chance(0.8));
+      // A shop sign (distinctive) or a ledge (plain) over the ground floor: a depth edge.
+      const double fy = side * (setback - 0.1);
+      if (rng.Chance(0.6)) {
+        const double sw = rng.Uniform(2.0, std::min(8.0, width - 1.0));
+        const int sign = s.AddTexture(b.Poster(static_cast<float>(rng.Uniform(0.3, 0.8))));
+        s.AddBox(Vec3(x + rng.Uniform(0.5, width - sw - 0.5) + 0.5 * sw, fy, 3.2), Vec3(0.5 * sw, 0.1, 0.4), 0.0,
+                 sign);
+      } else {
+        s.AddBox(Vec3(center.x(), fy, 3.3), Vec3(0.5 * width, 0.12, 0.1), 0.0,
+                 s.AddTexture(SurfaceTexture::Uniform(0.7f)));
+      }
+      // Doors and shop windows in the ground floor: irregular, non-periodic detail near the scanner.
+      for (double u = rng.Uniform(0.5, 3.0); u < width - 1.5; u += rng.Uniform(1.5, 6.0)) {
+        const double dw = rng.Uniform(0.9, 3.5), dh = rng.Uniform(2.0, 2.7);
+        if (u + dw > width - 0.5) break;
+        const int tex = rng.Chance(0.5)
+                            ? s.AddTexture(SurfaceTexture::Uniform(static_cast<float>(rng.Uniform(0.05, 0.25))))
+                            : s.AddTexture(b.Poster(static_cast<float>(rng.Uniform(0.2, 0.6))));
+        s.AddBox(Vec3(x + u + 0.5 * dw, side * (setback - 0.04), 0.5 * dh), Vec3(0.5 * dw, 0.04, 0.5 * dh), 0.0, tex);
+        u += dw;
+      }
+      x += width;
+      if (rng.Chance(0.3)) {  // an alley, sometimes closed by a plain garden wall
+        const double gap = rng.Uniform(3.0, 8.0);
+        if (rng.Chance(0.5)) {
+          const int wall = s.AddTexture(rng.Chance(0.5) ? SurfaceTexture::Uniform(0.6f) : b.Noisy(0.5f, 0.1f, 1.5));
+          s.AddBox(Vec3(x + 0.5 * gap, side * (w + 0.8), 1.1), Vec3(0.5 * gap, 0.15, 1.1), 0.0, wall);
+        }
+        x += gap;
+      }
+    }
+  }
+  // Buildings closing both ends of the street.
+  for (int end : {-1, 1}) {
+    const double height = b.repeated ? 15.0 : rng.Uniform(14.0, 20.0);
+    const Vec3 center(end * (half_l + 25.0 + 6.0), 0.0, 0.5 * height);
+    const Vec3 half(6.0, 40.0, 0.5 * height);
+    const int facade = end > 0 ? 1 : 0;
+    if (b.repeated) {
+      SurfaceTexture wide = shared_facade;  // the same windows across the whole 80 m façade
+      wide.windows.u_max = 80.0 - wide.windows.u_min;
+      const int front = s.AddTexture(wide), plain = s.AddTexture(SurfaceTexture::Uniform(0.55f));
+      std::array<int, 6> faces;
+      faces.fill(plain);
+      faces[facade] = front;
+      s.AddBox(center, half, 0.0, faces);
+    } else {
+      b.Building(center, half, facade, 80.0, true);
+    }
+  }
+}
+
+void FarSite(Builder& b) {
+  Scene& s = b.scene;
+  Rng& rng = b.rng;
+  const Vec3 c = FarSiteCenter();
+  SurfaceTexture gravel = b.Noisy(0.35f, 0.08f, 2.0);
+  gravel.blob_contrast = 0.1f;
+  gravel.blob_probability = 0.4;
+  s.AddRectangle(c, Vec3::UnitX(), Vec3::UnitY(), 250.0, 250.0, s.AddTexture(gravel));
+  // A courtyard: four buildings facing its centre (face index of the inner façade).
+  const Vec3 offsets[4] = {{25, 0, 0}, {-25, 0, 0}, {0, 25, 0}, {0, -25, 0}};
+  const int facades[4] = {1, 0, 3, 2};
+  for (int i = 0; i < 4; ++i) {
+    const double height = rng.Uniform(10.0, 20.0);
+    const bool along_y = i < 2;
+    const Vec3 half = along_y ? Vec3(6.0, 20.0, 0.5 * height) : Vec3(16.0, 6.0, 0.5 * height);
+    const Vec3 center = c + offsets[i] + Vec3(0, 0, 0.5 * height) + (offsets[i].normalized() * 6.0);
+    b.Building(center, half, facades[i], along_y ? 40.0 : 32.0, true);
+  }
+  const int bark = s.AddTexture(b.Noisy(0.3f, 0.12f, 0.25));
+  for (int i = 0; i < 6; ++i)
+    s.AddCylinder({c.x() + rng.Uniform(-12, 12), c.y() + rng.Uniform(-12, 12)}, 0.25, 0.0, 4.0, bark);
+}
+
+}  // namespace
+
+Eigen::Vector3d FarSiteCenter() { return Eigen::Vector3d(1500.0, 900.0, 0.0); }
+
+Status SceneOptions::Validate() const {
+  if (!(street_length_m >= 20.0 && street_length_m <= 1000.0))
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "scene street length " + std::to_string(street_length_m) + " m is outside [20, 1000] m");
+  if (!(street_half_width_m >= 6.0 && street_half_width_m <= 50.0))
+    return MakeError(ErrorCode::kInvalidArgument, "scene street half-width " + std::to_string(street_half_width_m) +
+                                                      " m is outside [6, 50] m");
+  return Status::Ok();
+}
+
+Scene MakeScene(const SceneOptions& options) {
+  SceneOptions o = options;  // out-of-range values are clamped (Validate reports them)
+  o.street_length_m = std::clamp(o.street_length_m, 20.0, 1000.0);
+  o.street_half_width_m = std::clamp(o.street_half_width_m, 6.0, 50.0);
+  const bool repeated = o.kind == SceneOptions::Kind::kRepeatedWindows;
+  Scene scene;
+  Rng rng(sim::Hash(o.seed, repeated ? 2 : 1));
+  Builder b{scene, rng, repeated};
+  // The ground: large enough that a scanner anywhere on the street sees ground to its max range.
+  scene.AddRectangle(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), 0.5 * o.street_length_m + 300.0, 300.0,
+                     scene.AddTexture(GroundTexture(o, rng, repeated)));
+  StreetBuildings(o, b);
+  if (!repeated) StreetFurniture(o, b);
+  if (o.far_site) FarSite(b);
+  scene.Build();
+  return scene;
+}
+
+}  // namespace scanreg
