@@ -1,0 +1,24 @@
+// scanreg-cli subcommands. Each returns the process exit status; errors go to stderr as one line.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace scanreg::cli {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const std::vector<std::string>& args);
+};
+
+int RunSimulate(const std::vector<std::string>& args);
+int RunDemo(const std::vector<std::string>& args);
+int RunNew(const std::vector<std::string>& args);
+int RunInfo(const std::vector<std::string>& args);
+int RunExportPoses(const std::vector<std::string>& args);
+int RunConvert(const std::vector<std::string>& args);
+
+const std::vector<Command>& Commands();
+
+}  // namespace scanreg::cli

@@ -1,0 +1,45 @@
+// scanreg-cli convert IN OUT: between scan formats, keeping the grid, reflectance and pose.
+#include <cstdio>
+
+#include "app/cli_commands.h"
+#include "app/cli_util.h"
+#include "core/io/scan_file.h"
+
+namespace scanreg::cli {
+
+int RunConvert(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .ply, .pcd)", argv, {}, &code);
+  if (!args) return code;
+  if (args->positional().size() != 2) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: give an input and an output file"));
+  }
+  const std::filesystem::path in = args->positional()[0], out = args->positional()[1];
+  std::error_code ec;
+  if (std::filesystem::exists(out, ec) && std::filesystem::equivalent(in, out, ec)) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: input and output are the same file; input files are never modified"));
+  }
+  TerminalProgress progress;
+  CancelToken cancel;
+  auto scans = io::ReadScanFile(in, progress, cancel);
+  if (!scans) return Fail(scans.error());
+  if (Status s = io::WriteScanFile(out, *scans, progress, cancel); !s) return Fail(s.error());
+  std::size_t points = 0;
+  for (const Scan& s : *scans) points += s.CountValid();
+  std::printf("converted %zu scan(s), %zu points: %s -> %s\n", scans->size(), points, in.c_str(), out.c_str());
+  return 0;
+}
+
+const std::vector<Command>& Commands() {
+  static const std::vector<Command> commands = {
+      {"demo", "simulate a street project (the built-in demo)", RunDemo},
+      {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
+      {"new", "create a project from PTX / PLY / PCD scan files", RunNew},
+      {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
+      {"export-poses", "write world_from_scan poses as JSON or CloudCompare 4x4 .txt files", RunExportPoses},
+      {"convert", "convert a scan file between PTX, PLY and PCD", RunConvert},
+  };
+  return commands;
+}
+
+}  // namespace scanreg::cli

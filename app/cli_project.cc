@@ -1,0 +1,114 @@
+// scanreg-cli new / info / export-poses.
+#include <cmath>
+#include <cstdio>
+
+#include "app/cli_commands.h"
+#include "app/cli_util.h"
+#include "core/geometry/transform.h"
+#include "core/io/pose_file.h"
+#include "core/pipeline/create_project.h"
+#include "core/pipeline/project_scans.h"
+
+namespace scanreg::cli {
+
+int RunNew(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp("new", "PROJECT.scanreg.json SCAN... [--poses FILE] [--reference-poses FILE]", argv,
+                          {{"poses", true, false, "FILE     initial poses (Stanford .conf or poses .json)"},
+                           {"reference-poses", true, false, "FILE   reference (ground-truth) poses, same formats"}},
+                          &code);
+  if (!args) return code;
+  if (args->positional().size() < 2) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "new: give the project file and at least one scan file"));
+  }
+  pipeline::CreateProjectOptions options;
+  for (std::size_t i = 1; i < args->positional().size(); ++i) options.scan_files.emplace_back(args->positional()[i]);
+  if (auto p = args->Get("poses")) options.poses = *p;
+  if (auto p = args->Get("reference-poses")) options.reference_poses = *p;
+  TerminalProgress progress;
+  CancelToken cancel;
+  auto project = pipeline::CreateProject(args->positional()[0], options, progress, cancel);
+  if (!project) return Fail(project.error());
+  std::printf("created %s with %zu scans\n", project->file.string().c_str(), project->scans.size());
+  return 0;
+}
+
+int RunInfo(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp("info", "PROJECT.scanreg.json", argv, {}, &code);
+  if (!args) return code;
+  if (args->positional().size() != 1) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "info: give exactly one project file"));
+  }
+  auto project = io::LoadProject(args->positional()[0]);
+  if (!project) return Fail(project.error());
+  TerminalProgress progress;
+  CancelToken cancel;
+  auto scans = pipeline::LoadProjectScans(*project, progress, cancel);
+  if (!scans) return Fail(scans.error());
+  std::printf("project %s\n%zu scans, %zu links, root %s\n\n", project->file.string().c_str(), scans->size(),
+              project->links.size(), project->root ? project->root->c_str() : "(automatic)");
+  std::printf("%-12s %-24s %11s %8s %11s  %-10s %10s %10s %10s %8s %s\n", "scan", "file", "size", "valid %",
+              "points", "status", "x (m)", "y (m)", "z (m)", "yaw (°)", "reference error");
+  for (std::size_t i = 0; i < scans->size(); ++i) {
+    const Scan& s = (*scans)[i];
+    const io::ProjectScan& ps = project->scans[i];
+    const std::size_t valid = s.CountValid();
+    const Eigen::Isometry3d& t = ps.world_from_scan;
+    const double yaw = std::atan2(t.linear()(1, 0), t.linear()(0, 0)) * 180.0 / M_PI;
+    std::string reference = "-";
+    if (ps.reference_world_from_scan && ps.registered) {
+      const PoseError e = ComparePoses(t, *ps.reference_world_from_scan);
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.1f mm, %.4f°", e.position_m * 1000, e.angle_rad * 180 / M_PI);
+      reference = buf;
+    } else if (ps.reference_world_from_scan) {
+      reference = "(has reference)";
+    }
+    const std::string size = std::to_string(s.cols) + "x" + std::to_string(s.rows);
+    std::printf("%-12s %-24s %11s %8.1f %11zu  %-10s %10.3f %10.3f %10.3f %8.2f %s\n", s.name.c_str(),
+                ps.path.filename().string().c_str(), size.c_str(), s.size() ? 100.0 * valid / s.size() : 0.0, valid,
+                ps.registered ? "registered" : "unregistered", t.translation().x(), t.translation().y(),
+                t.translation().z(), yaw, reference.c_str());
+  }
+  return 0;
+}
+
+int RunExportPoses(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp("export-poses", "PROJECT.scanreg.json --format json|txt --out PATH", argv,
+                          {{"format", true, false, "json|txt   json: one file; txt: one CloudCompare 4x4 file per scan"},
+                           {"out", true, false, "PATH     output file (json) or folder (txt)"}},
+                          &code);
+  if (!args) return code;
+  if (args->positional().size() != 1) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: give exactly one project file"));
+  }
+  const std::string format = args->Get("format").value_or("json");
+  const auto out = args->Get("out");
+  if (format != "json" && format != "txt") {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: --format must be json or txt, not '" + format + "'"));
+  }
+  if (!out) return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: --out PATH is required"));
+  auto project = io::LoadProject(args->positional()[0]);
+  if (!project) return Fail(project.error());
+  if (format == "json") {
+    std::vector<io::NamedPose> poses;
+    for (const io::ProjectScan& s : project->scans) poses.push_back({s.name, s.world_from_scan});
+    if (Status s = io::WritePosesJson(*out, poses); !s) return Fail(s.error());
+    std::printf("wrote %zu poses to %s\n", poses.size(), out->c_str());
+    return 0;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(*out, ec);
+  if (ec) return Fail(MakeError(ErrorCode::kIoError, "export-poses: cannot create folder '" + *out + "': " + ec.message()));
+  for (const io::ProjectScan& s : project->scans) {
+    if (Status st = io::WriteMatrixTxt(std::filesystem::path(*out) / (s.name + ".txt"), s.world_from_scan); !st) {
+      return Fail(st.error());
+    }
+  }
+  std::printf("wrote %zu matrix files to %s\n", project->scans.size(), out->c_str());
+  return 0;
+}
+
+}  // namespace scanreg::cli

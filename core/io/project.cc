@@ -1,0 +1,221 @@
+#include "core/io/project.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "core/io/atomic_file.h"
+#include "core/geometry/transform.h"
+
+namespace scanreg::io {
+namespace {
+
+using nlohmann::json;
+
+json PoseToJson(const Eigen::Isometry3d& t) {
+  const auto m = RowMajorFromIsometry(t);
+  return json(std::vector<double>(m.begin(), m.end()));
+}
+
+Expected<Eigen::Isometry3d> PoseFromJson(const json& j, const std::string& what) {
+  if (!j.is_array() || j.size() != 16) {
+    return MakeError(ErrorCode::kParseError, what + " must be a list of 16 numbers (row-major 4x4)");
+  }
+  std::array<double, 16> m{};
+  for (int i = 0; i < 16; ++i) {
+    if (!j[i].is_number()) return MakeError(ErrorCode::kParseError, what + " holds a value that is not a number");
+    m[i] = j[i].get<double>();
+    if (!std::isfinite(m[i])) return MakeError(ErrorCode::kParseError, what + " holds a non-finite number");
+  }
+  Eigen::Matrix3d r, clean;
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) r(i, k) = m[4 * i + k];
+  if (!ProjectToRotation(r, &clean, 1e-4) || m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1) {
+    return MakeError(ErrorCode::kParseError, what + " is not a rigid transform");
+  }
+  return IsometryFromRowMajor(m);
+}
+
+LinkStatus LinkStatusFromName(const std::string& s) {
+  if (s == "ok") return LinkStatus::kOk;
+  if (s == "weak") return LinkStatus::kWeak;
+  return LinkStatus::kFailed;
+}
+
+json LinkToJson(const LinkRecord& l) {
+  return json{{"parent", l.parent},
+              {"child", l.child},
+              {"method", l.method},
+              {"status", LinkStatusName(l.status)},
+              {"reason", l.reason},
+              {"matches", l.matches},
+              {"reliable", l.reliable},
+              {"ransac_inliers", l.ransac_inliers},
+              {"consistent", l.consistent},
+              {"rms_m", l.rms_m},
+              {"overlap", l.overlap},
+              {"iterations", l.iterations},
+              {"seconds", l.seconds},
+              {"parent_from_child", PoseToJson(l.parent_from_child)},
+              {"user_accepted", l.user_accepted},
+              {"user_rejected", l.user_rejected}};
+}
+
+Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
+  LinkRecord l;
+  try {
+    l.parent = j.at("parent").get<std::string>();
+    l.child = j.at("child").get<std::string>();
+    l.method = j.value("method", "");
+    l.status = LinkStatusFromName(j.value("status", "failed"));
+    l.reason = j.value("reason", "");
+    l.matches = j.value("matches", 0);
+    l.reliable = j.value("reliable", 0);
+    l.ransac_inliers = j.value("ransac_inliers", 0);
+    l.consistent = j.value("consistent", 0);
+    l.rms_m = j.value("rms_m", 0.0);
+    l.overlap = j.value("overlap", 0.0);
+    l.iterations = j.value("iterations", 0);
+    l.seconds = j.value("seconds", 0.0);
+    l.user_accepted = j.value("user_accepted", false);
+    l.user_rejected = j.value("user_rejected", false);
+  } catch (const json::exception& e) {
+    return MakeError(ErrorCode::kParseError, where + ": " + e.what());
+  }
+  if (j.contains("parent_from_child")) {
+    auto t = PoseFromJson(j["parent_from_child"], where + " parent_from_child");
+    if (!t) return t.error();
+    l.parent_from_child = *t;
+  }
+  return l;
+}
+
+}  // namespace
+
+const char* LinkStatusName(LinkStatus status) {
+  switch (status) {
+    case LinkStatus::kOk: return "ok";
+    case LinkStatus::kWeak: return "weak";
+    case LinkStatus::kFailed: return "failed";
+  }
+  return "failed";
+}
+
+int Project::FindScan(const std::string& name) const {
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    if (scans[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+Expected<Project> LoadProject(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  const std::string where = "project '" + path.string() + "'";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return MakeError(ErrorCode::kNotFound, where + " cannot be opened; check the path");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::parse_error& e) {
+    return MakeError(ErrorCode::kParseError, where + " is not valid JSON (" + e.what() +
+                                                 "); restore it from a backup or create a new project");
+  }
+  if (!j.is_object() || !j.contains("schema_version") || !j["schema_version"].is_number_integer()) {
+    return MakeError(ErrorCode::kParseError, where + " has no schema_version; is it a scanreg project?");
+  }
+  const int version = j["schema_version"].get<int>();
+  if (version != Project::kSchemaVersion) {
+    return MakeError(ErrorCode::kUnsupported, where + " has schema version " + std::to_string(version) +
+                                                  "; this scanreg reads version " +
+                                                  std::to_string(Project::kSchemaVersion) + " — use a matching scanreg");
+  }
+  Project project;
+  project.file = fs::absolute(path);
+  const fs::path base = project.file.parent_path();
+  std::set<std::string> names;
+  try {
+    for (const json& s : j.at("scans")) {
+      ProjectScan scan;
+      scan.name = s.at("name").get<std::string>();
+      const std::string label = where + ", scan '" + scan.name + "'";
+      if (scan.name.empty() || !names.insert(scan.name).second) {
+        return MakeError(ErrorCode::kParseError, label + ": scan names must be unique and non-empty");
+      }
+      scan.path = fs::path(s.at("path").get<std::string>());
+      if (scan.path.is_relative()) scan.path = (base / scan.path).lexically_normal();
+      std::error_code ec;
+      if (!fs::is_regular_file(scan.path, ec)) {
+        return MakeError(ErrorCode::kNotFound, label + ": scan file '" + scan.path.string() +
+                                                   "' is missing; move it back or remove the scan from the project");
+      }
+      scan.index_in_file = s.value("index_in_file", 0);
+      scan.registered = s.value("registered", false);
+      if (s.contains("world_from_scan")) {
+        auto t = PoseFromJson(s["world_from_scan"], label + " world_from_scan");
+        if (!t) return t.error();
+        scan.world_from_scan = *t;
+      }
+      if (s.contains("reference_world_from_scan")) {
+        auto t = PoseFromJson(s["reference_world_from_scan"], label + " reference_world_from_scan");
+        if (!t) return t.error();
+        scan.reference_world_from_scan = *t;
+      }
+      if (s.contains("parent_override")) scan.parent_override = s["parent_override"].get<std::string>();
+      project.scans.push_back(std::move(scan));
+    }
+    for (const ProjectScan& scan : project.scans) {
+      if (scan.parent_override && project.FindScan(*scan.parent_override) < 0) {
+        return MakeError(ErrorCode::kParseError, where + ", scan '" + scan.name + "': parent override '" +
+                                                     *scan.parent_override + "' is not a scan of the project");
+      }
+    }
+    if (j.contains("root") && !j["root"].is_null()) project.root = j["root"].get<std::string>();
+    if (j.contains("links")) {
+      int k = 0;
+      for (const json& l : j["links"]) {
+        auto link = LinkFromJson(l, where + ", link " + std::to_string(k++));
+        if (!link) return link.error();
+        project.links.push_back(std::move(*link));
+      }
+    }
+    if (j.contains("settings")) {
+      for (auto it = j["settings"].begin(); it != j["settings"].end(); ++it)
+        project.settings[it.key()] = it->is_string() ? it->get<std::string>() : it->dump();
+    }
+  } catch (const json::exception& e) {
+    return MakeError(ErrorCode::kParseError, where + " is malformed: " + e.what());
+  }
+  return project;
+}
+
+Status SaveProject(const Project& project, const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  const fs::path base = fs::absolute(path).parent_path();
+  json scans = json::array();
+  for (const ProjectScan& s : project.scans) {
+    fs::path rel = s.path.is_absolute() ? s.path.lexically_relative(base) : s.path;
+    if (rel.empty()) rel = s.path;
+    json js{{"name", s.name},
+            {"path", rel.generic_string()},
+            {"index_in_file", s.index_in_file},
+            {"registered", s.registered},
+            {"world_from_scan", PoseToJson(s.world_from_scan)}};
+    if (s.reference_world_from_scan) js["reference_world_from_scan"] = PoseToJson(*s.reference_world_from_scan);
+    if (s.parent_override) js["parent_override"] = *s.parent_override;
+    scans.push_back(std::move(js));
+  }
+  json links = json::array();
+  for (const LinkRecord& l : project.links) links.push_back(LinkToJson(l));
+  json j{{"schema_version", Project::kSchemaVersion},
+         {"generator", "scanreg"},
+         {"scans", std::move(scans)},
+         {"links", std::move(links)},
+         {"settings", project.settings}};
+  j["root"] = project.root ? json(*project.root) : json(nullptr);
+  AtomicFile file(path);
+  if (Status s = file.Open(); !s) return s;
+  if (Status s = file.Write(j.dump(2) + "\n"); !s) return s;
+  return file.Commit();
+}
+
+}  // namespace scanreg::io

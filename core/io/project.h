@@ -1,0 +1,72 @@
+// The project file `*.scanreg.json`: which scans belong to a project (paths relative to the
+// project file), their estimated and reference poses, scan-order overrides, link results and
+// settings. Saved atomically; versioned.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/common/expected.h"
+
+namespace scanreg::io {
+
+enum class LinkStatus { kOk, kWeak, kFailed };
+const char* LinkStatusName(LinkStatus status);
+
+// The evidence of one pairwise registration (child registered to parent). Stored in the project
+// so that a report or the GUI can show it without re-running.
+struct LinkRecord {
+  std::string parent;  // scan names
+  std::string child;
+  std::string method;  // e.g. "epnp+keypoints"
+  LinkStatus status = LinkStatus::kFailed;
+  std::string reason;  // why weak / failed; empty when ok
+  int matches = 0;
+  int reliable = 0;
+  int ransac_inliers = 0;
+  int consistent = 0;
+  double rms_m = 0.0;
+  double overlap = 0.0;  // fraction [0, 1]
+  int iterations = 0;
+  double seconds = 0.0;
+  Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
+  bool user_accepted = false;  // the user accepted a weak link
+  bool user_rejected = false;  // the user rejected the link
+};
+
+struct ProjectScan {
+  std::string name;                 // unique within the project
+  std::filesystem::path path;       // absolute while in memory; relative to the project on disk
+  int index_in_file = 0;            // for multi-scan files (PTX)
+  Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+  bool registered = false;          // world_from_scan is a registration result (or the root)
+  std::optional<Eigen::Isometry3d> reference_world_from_scan;
+  std::optional<std::string> parent_override;  // scan-order override: register to this scan
+};
+
+struct Project {
+  static constexpr int kSchemaVersion = 1;
+
+  std::filesystem::path file;  // where it was loaded from / saved to; empty when new
+  std::vector<ProjectScan> scans;
+  std::vector<LinkRecord> links;
+  std::optional<std::string> root;                // root scan of the scan order
+  std::map<std::string, std::string> settings;    // option name -> value, as the user set them
+
+  // Index of the scan with this name, or -1.
+  int FindScan(const std::string& name) const;
+};
+
+// Reads and checks a project file: schema version, unique scan names, every scan file present
+// (an error names the missing file and the project), poses finite and rigid.
+Expected<Project> LoadProject(const std::filesystem::path& path);
+
+// Writes the project atomically (temp, fsync, rename); scan paths are stored relative to the
+// project's folder. Does not touch the scan files.
+Status SaveProject(const Project& project, const std::filesystem::path& path);
+
+}  // namespace scanreg::io

@@ -1,0 +1,120 @@
+#include "core/pipeline/create_project.h"
+
+#include <set>
+
+#include "core/io/pose_file.h"
+#include "core/io/ptx.h"
+#include "core/io/scan_file.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+Expected<std::vector<io::NamedPose>> ReadPoses(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".conf") return io::ReadBunConf(path);
+  if (ext == ".json") return io::ReadPosesJson(path);
+  return MakeError(ErrorCode::kUnsupported, "pose file '" + path.string() +
+                                                "' has an unknown extension; use a Stanford .conf or a poses .json");
+}
+
+// Applies each named pose to the scan whose name or file name matches; every pose must match.
+Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::NamedPose>& poses, bool reference,
+                  io::Project& project) {
+  for (const io::NamedPose& pose : poses) {
+    bool matched = false;
+    for (io::ProjectScan& scan : project.scans) {
+      const bool same = scan.name == pose.scan || scan.path.filename().string() == pose.scan ||
+                        scan.path.stem().string() == pose.scan;
+      if (!same) continue;
+      if (reference) {
+        scan.reference_world_from_scan = pose.world_from_scan;
+      } else {
+        scan.world_from_scan = pose.world_from_scan;
+      }
+      matched = true;
+    }
+    if (!matched) {
+      return MakeError(ErrorCode::kNotFound, "pose file '" + pose_file.string() + "' names scan '" + pose.scan +
+                                                 "', which is not among the project's scans; check the file names");
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel) {
+  if (options.scan_files.empty()) {
+    return MakeError(ErrorCode::kInvalidArgument, "a project needs at least one scan file");
+  }
+  io::Project project;
+  project.file = std::filesystem::absolute(project_path);
+  std::set<std::string> names;
+  for (std::size_t f = 0; f < options.scan_files.size(); ++f) {
+    const std::filesystem::path path = std::filesystem::absolute(options.scan_files[f]).lexically_normal();
+    SubProgress sub(progress, double(f) / options.scan_files.size(), double(f + 1) / options.scan_files.size());
+    Expected<std::vector<Scan>> scans = io::ReadScanFile(path, sub, cancel);
+    if (!scans) return scans.error();
+    for (std::size_t k = 0; k < scans->size(); ++k) {
+      const Scan& scan = (*scans)[k];
+      if (scan.CountValid() == 0) {
+        return MakeError(ErrorCode::kInvalidArgument, "scan '" + scan.name + "' in '" + path.string() +
+                                                          "' has no valid point; remove it from the list");
+      }
+      io::ProjectScan ps;
+      ps.name = scan.name;
+      for (int n = 2; !names.insert(ps.name).second; ++n) ps.name = scan.name + "_" + std::to_string(n);
+      ps.path = path;
+      ps.index_in_file = static_cast<int>(k);
+      ps.world_from_scan = scan.world_from_scan;
+      ps.reference_world_from_scan = scan.reference_world_from_scan;
+      project.scans.push_back(std::move(ps));
+    }
+  }
+  for (const auto& [file, reference] : {std::make_pair(options.poses, false),
+                                        std::make_pair(options.reference_poses, true)}) {
+    if (!file) continue;
+    Expected<std::vector<io::NamedPose>> poses = ReadPoses(*file);
+    if (!poses) return poses.error();
+    if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
+  }
+  if (Status s = io::SaveProject(project, project_path); !s) return s.error();
+  return project;
+}
+
+Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,
+                                            ProgressSink& progress, const CancelToken& cancel) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    return MakeError(ErrorCode::kIoError, "cannot create folder '" + dir.string() + "': " + ec.message());
+  }
+  SubProgress simulate_progress(progress, 0.0, 0.8);
+  Expected<std::vector<Scan>> scans = SimulateProject(options, simulate_progress, cancel);
+  if (!scans) return scans.error();
+  io::Project project;
+  const std::filesystem::path project_path = std::filesystem::absolute(dir / "project.scanreg.json");
+  project.file = project_path;
+  for (std::size_t i = 0; i < scans->size(); ++i) {
+    const Scan& scan = (*scans)[i];
+    const std::filesystem::path ptx = project_path.parent_path() / (scan.name + ".ptx");
+    SubProgress sub(progress, 0.8 + 0.2 * i / scans->size(), 0.8 + 0.2 * (i + 1) / scans->size());
+    if (Status s = io::WritePtx(ptx, {scan}, sub, cancel); !s) return s.error();
+    io::ProjectScan ps;
+    ps.name = scan.name;
+    ps.path = ptx;
+    ps.world_from_scan = scan.world_from_scan;
+    ps.reference_world_from_scan = scan.reference_world_from_scan;
+    project.scans.push_back(std::move(ps));
+  }
+  project.settings["simulated.stations"] = std::to_string(options.stations);
+  project.settings["simulated.seed"] = std::to_string(options.seed);
+  project.settings["simulated.size"] = std::to_string(options.scanner.cols) + "x" + std::to_string(options.scanner.rows);
+  project.settings["simulated.noise_m"] = std::to_string(options.scanner.range_noise_m);
+  if (Status s = io::SaveProject(project, project_path); !s) return s.error();
+  return project;
+}
+
+}  // namespace scanreg::pipeline

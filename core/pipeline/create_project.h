@@ -1,0 +1,36 @@
+// Creating a project from scan files (scanreg-cli new, the GUI's New project / Add scans) and
+// from the simulator (the demo).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/io/project.h"
+#include "core/simulate/project_sim.h"
+
+namespace scanreg::pipeline {
+
+struct CreateProjectOptions {
+  std::vector<std::filesystem::path> scan_files;  // PTX (one or more scans each), PLY, PCD
+  // Optional pose files: Stanford .conf or scanreg poses .json; matched to scans by scan name
+  // or file name. `poses` become the initial world_from_scan, `reference_poses` the reference.
+  std::optional<std::filesystem::path> poses;
+  std::optional<std::filesystem::path> reference_poses;
+};
+
+// Reads every scan file (to check it and learn its scans), builds the project and saves it at
+// project_path. Scan names are unique (a suffix is added on collision). A scan with no valid
+// point is an error naming it. Pose-file entries that match no scan are an error too.
+Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel);
+
+// Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
+// header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose
+// reference poses are the true poses.
+Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,
+                                            ProgressSink& progress, const CancelToken& cancel);
+
+}  // namespace scanreg::pipeline

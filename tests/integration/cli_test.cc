@@ -1,0 +1,155 @@
+// Runs scanreg-cli end to end: simulate, new, info, export-poses, convert, and bad input.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/geometry/transform.h"
+#include "core/io/pose_file.h"
+#include "core/io/project.h"
+#include "core/io/scan_file.h"
+#include "tests/support/test_paths.h"
+
+namespace scanreg {
+namespace {
+
+struct RunResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunCli(const std::string& args) {
+  RunResult r;
+  const std::string cmd = std::string(SCANREG_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int st = pclose(pipe);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string ReadAll(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string Quote(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+TEST(CliTest, SimulateIsDeterministicAndWritesReferencePoses) {
+  test::TempDir dir;
+  const std::string common = "simulate --stations 3 --size 400x100 --noise 0.012 --seed 7 --out ";
+  RunResult a = RunCli(common + Quote(dir / "a"));
+  ASSERT_EQ(a.status, 0) << a.output;
+  RunResult b = RunCli(common + Quote(dir / "b"));
+  ASSERT_EQ(b.status, 0) << b.output;
+  for (const char* name : {"s01.ptx", "s02.ptx", "s03.ptx"}) {
+    const std::string fa = ReadAll(dir / "a" / name), fb = ReadAll(dir / "b" / name);
+    ASSERT_GT(fa.size(), 1000u) << name;
+    EXPECT_TRUE(fa == fb) << name << " differs between two runs with the same seed";
+  }
+  RunResult c = RunCli("simulate --stations 3 --size 400x100 --seed 8 --out " + Quote(dir / "c"));
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_FALSE(ReadAll(dir / "a" / "s01.ptx") == ReadAll(dir / "c" / "s01.ptx")) << "another seed, another scan";
+
+  Expected<io::Project> project = io::LoadProject(dir / "a" / "project.scanreg.json");
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  ASSERT_EQ(project->scans.size(), 3u);
+  for (const io::ProjectScan& s : project->scans) {
+    ASSERT_TRUE(s.reference_world_from_scan.has_value()) << s.name;
+    EXPECT_TRUE(s.world_from_scan.isApprox(Eigen::Isometry3d::Identity())) << "scans arrive unregistered";
+  }
+  // Stations about 5 m apart (default spacing, with jitter).
+  const double d = (project->scans[1].reference_world_from_scan->translation() -
+                    project->scans[0].reference_world_from_scan->translation()).norm();
+  EXPECT_GT(d, 3.0);
+  EXPECT_LT(d, 7.0);
+}
+
+TEST(CliTest, NewInfoExportAndConvertWorkTogether) {
+  test::TempDir dir;
+  ASSERT_EQ(RunCli("simulate --stations 2 --size 300x80 --out " + Quote(dir / "sim")).status, 0);
+  // Reference poses written by export-poses become the initial poses of a new project.
+  RunResult exported = RunCli("export-poses " + Quote(dir / "sim" / "project.scanreg.json") +
+                              " --format json --out " + Quote(dir / "identity.json"));
+  ASSERT_EQ(exported.status, 0) << exported.output;
+  Expected<std::vector<io::NamedPose>> poses = io::ReadPosesJson(dir / "identity.json");
+  ASSERT_TRUE(poses.ok());
+  ASSERT_EQ(poses->size(), 2u);
+  (*poses)[1].world_from_scan.translation() << 1.0, 2.0, 3.0;
+  ASSERT_TRUE(io::WritePosesJson(dir / "moved.json", *poses).ok());
+
+  const std::string before = ReadAll(dir / "sim" / "s01.ptx");
+  RunResult created = RunCli("new " + Quote(dir / "mine.scanreg.json") + " " + Quote(dir / "sim" / "s01.ptx") + " " +
+                             Quote(dir / "sim" / "s02.ptx") + " --poses " + Quote(dir / "moved.json"));
+  ASSERT_EQ(created.status, 0) << created.output;
+  EXPECT_EQ(ReadAll(dir / "sim" / "s01.ptx"), before) << "input files are never modified";
+  Expected<io::Project> mine = io::LoadProject(dir / "mine.scanreg.json");
+  ASSERT_TRUE(mine.ok());
+  EXPECT_NEAR(mine->scans[1].world_from_scan.translation().y(), 2.0, 1e-12);
+
+  RunResult info = RunCli("info " + Quote(dir / "mine.scanreg.json"));
+  ASSERT_EQ(info.status, 0) << info.output;
+  EXPECT_NE(info.output.find("300x80"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("s02"), std::string::npos);
+
+  RunResult txt = RunCli("export-poses " + Quote(dir / "mine.scanreg.json") + " --format txt --out " + Quote(dir / "txt"));
+  ASSERT_EQ(txt.status, 0) << txt.output;
+  Expected<Eigen::Isometry3d> m = io::ReadMatrixTxt(dir / "txt" / "s02.txt");
+  ASSERT_TRUE(m.ok());
+  EXPECT_NEAR(m->translation().z(), 3.0, 1e-9);
+
+  RunResult conv = RunCli("convert " + Quote(dir / "sim" / "s01.ptx") + " " + Quote(dir / "s01.ply"));
+  ASSERT_EQ(conv.status, 0) << conv.output;
+  CancelToken cancel;
+  NullProgress progress;
+  auto ptx = io::ReadScanFile(dir / "sim" / "s01.ptx", progress, cancel);
+  auto ply = io::ReadScanFile(dir / "s01.ply", progress, cancel);
+  ASSERT_TRUE(ptx.ok() && ply.ok());
+  ASSERT_EQ((*ply)[0].rows, (*ptx)[0].rows);
+  ASSERT_EQ((*ply)[0].cols, (*ptx)[0].cols);
+  EXPECT_EQ((*ply)[0].CountValid(), (*ptx)[0].CountValid());
+  EXPECT_TRUE((*ply)[0].valid == (*ptx)[0].valid);
+}
+
+TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
+  test::TempDir dir;
+  struct Case {
+    std::string args;
+    std::string expected;  // a fragment of the message
+  };
+  std::ofstream(dir / "broken.ptx") << "10\n10\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n1 2 3 0.5\n";
+  const std::vector<Case> cases = {
+      {"frobnicate", "unknown command"},
+      {"simulate --stations 0 --out " + Quote(dir / "x"), "--stations"},
+      {"simulate --size 12by4 --out " + Quote(dir / "x"), "--size"},
+      {"simulate --noise -1 --out " + Quote(dir / "x"), "--noise"},
+      {"simulate --bogus", "unknown option '--bogus'"},
+      {"info " + Quote(dir / "absent.scanreg.json"), "absent.scanreg.json"},
+      {"new " + Quote(dir / "p.scanreg.json") + " " + Quote(dir / "broken.ptx"), "broken.ptx"},
+      {"convert " + Quote(dir / "broken.ptx") + " " + Quote(dir / "out.ply"), "line"},
+      {"export-poses " + Quote(dir / "absent.scanreg.json") + " --format yaml --out x", "--format"},
+  };
+  for (const Case& c : cases) {
+    RunResult r = RunCli(c.args);
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find("scanreg-cli"), std::string::npos) << c.args;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.ply")) << "a failed conversion writes nothing";
+}
+
+TEST(CliTest, HelpListsEverySubcommand) {
+  RunResult r = RunCli("--help");
+  EXPECT_EQ(r.status, 0);
+  for (const char* c : {"demo", "simulate", "new", "info", "export-poses", "convert"})
+    EXPECT_NE(r.output.find(c), std::string::npos) << c;
+}
+
+}  // namespace
+}  // namespace scanreg
