@@ -1,0 +1,262 @@
+#include "core/features/feature_cache.h"
+
+#include <atomic>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <opencv2/core/version.hpp>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <unistd.h>
+
+#include "core/common/log.h"
+
+namespace scanreg {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'R', 'G', 'F', 'E', 'A', 'T', '\0'};
+constexpr std::uint32_t kFormatVersion = 1;
+// Bump when DetectFeatures changes its output for the same options (invalidates old entries).
+constexpr std::uint64_t kDetectorVersion = 1;
+constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + 4 + 4 + 8;
+constexpr int kKeypointFloats = 5;
+
+// A 64-bit hash in the style of xxHash64: four independent lanes over 8-byte words (~10 GB/s),
+// then a byte tail and an avalanche. Not cryptographic; collisions of real scans are negligible.
+class Hasher {
+ public:
+  explicit Hasher(std::uint64_t seed = 0) {
+    lanes_[0] = seed + kP1 + kP2;
+    lanes_[1] = seed + kP2;
+    lanes_[2] = seed;
+    lanes_[3] = seed - kP1;
+  }
+
+  void Add(const void* data, std::size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    total_ += bytes;
+    std::size_t i = 0;
+    for (; i + 32 <= bytes; i += 32)
+      for (int l = 0; l < 4; ++l) lanes_[l] = Round(lanes_[l], Load(p + i + 8 * l));
+    for (; i + 8 <= bytes; i += 8) tail_ = Round(tail_ ^ Load(p + i), tail_);
+    for (; i < bytes; ++i) tail_ = (tail_ ^ p[i]) * kP1;
+  }
+  template <typename T>
+  void AddValue(const T& value) {
+    Add(&value, sizeof(T));
+  }
+
+  std::uint64_t Digest() const {
+    std::uint64_t h = Rotl(lanes_[0], 1) + Rotl(lanes_[1], 7) + Rotl(lanes_[2], 12) + Rotl(lanes_[3], 18);
+    h ^= tail_ * kP2;
+    h += total_ * kP3;
+    h ^= h >> 33;
+    h *= kP2;
+    h ^= h >> 29;
+    h *= kP3;
+    h ^= h >> 32;
+    return h;
+  }
+
+ private:
+  static constexpr std::uint64_t kP1 = 11400714785074694791ULL;
+  static constexpr std::uint64_t kP2 = 14029467366897019727ULL;
+  static constexpr std::uint64_t kP3 = 1609587929392839161ULL;
+  static std::uint64_t Rotl(std::uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+  static std::uint64_t Load(const unsigned char* p) {
+    std::uint64_t v;
+    std::memcpy(&v, p, 8);
+    return v;
+  }
+  static std::uint64_t Round(std::uint64_t acc, std::uint64_t input) {
+    acc += input * kP2;
+    acc = Rotl(acc, 31);
+    return acc * kP1;
+  }
+
+  std::uint64_t lanes_[4];
+  std::uint64_t tail_ = 0x9E3779B97F4A7C15ULL;
+  std::uint64_t total_ = 0;
+};
+
+std::uint64_t PayloadChecksum(const char* data, std::size_t bytes) {
+  Hasher h(0x5EEDF00DULL);
+  h.Add(data, bytes);
+  return h.Digest();
+}
+
+template <typename T>
+void Put(std::string& out, const T& value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+template <typename T>
+T Get(const std::string& in, std::size_t& pos) {
+  T value;
+  std::memcpy(&value, in.data() + pos, sizeof(T));
+  pos += sizeof(T);
+  return value;
+}
+
+std::string Serialize(const ScanFeatures& f, std::uint64_t key) {
+  const std::uint64_t n = f.keypoints.size();
+  std::string out;
+  out.reserve(kHeaderBytes + n * (kKeypointFloats + kSiftDescriptorSize) * 4 + 8);
+  out.append(kMagic, 8);
+  Put(out, kFormatVersion);
+  Put(out, static_cast<std::uint32_t>(kSiftDescriptorSize));
+  Put(out, key);
+  Put(out, static_cast<std::int32_t>(f.rows));
+  Put(out, static_cast<std::int32_t>(f.cols));
+  Put(out, n);
+  for (const Keypoint& k : f.keypoints) {
+    const float values[kKeypointFloats] = {k.u, k.v, k.size, k.angle, k.response};
+    out.append(reinterpret_cast<const char*>(values), sizeof(values));
+  }
+  out.append(reinterpret_cast<const char*>(f.descriptors.data()), f.descriptors.size() * sizeof(float));
+  Put(out, PayloadChecksum(out.data() + kHeaderBytes, out.size() - kHeaderBytes));
+  return out;
+}
+
+// Parses an entry; on failure returns an error saying what is wrong (for the warning).
+Expected<ScanFeatures> Deserialize(const std::string& in, std::uint64_t key, const Scan& scan) {
+  auto bad = [](const std::string& why) { return MakeError(ErrorCode::kParseError, why); };
+  if (in.size() < kHeaderBytes + 8) return bad("truncated header (" + std::to_string(in.size()) + " bytes)");
+  if (std::memcmp(in.data(), kMagic, 8) != 0) return bad("not a feature cache file (bad magic)");
+  std::size_t pos = 8;
+  if (Get<std::uint32_t>(in, pos) != kFormatVersion) return bad("unsupported format version");
+  if (Get<std::uint32_t>(in, pos) != kSiftDescriptorSize) return bad("unexpected descriptor size");
+  if (Get<std::uint64_t>(in, pos) != key) return bad("the entry belongs to another scan or options");
+  ScanFeatures f;
+  f.rows = Get<std::int32_t>(in, pos);
+  f.cols = Get<std::int32_t>(in, pos);
+  const auto n = Get<std::uint64_t>(in, pos);
+  if (f.rows != scan.rows || f.cols != scan.cols) return bad("grid size differs from the scan's");
+  const std::uint64_t per_feature = (kKeypointFloats + kSiftDescriptorSize) * sizeof(float);
+  if (n > (in.size() / per_feature) || in.size() != kHeaderBytes + n * per_feature + 8)
+    return bad("size " + std::to_string(in.size()) + " bytes does not match " + std::to_string(n) + " features");
+  std::size_t checksum_pos = in.size() - 8;
+  if (Get<std::uint64_t>(in, checksum_pos) != PayloadChecksum(in.data() + kHeaderBytes, in.size() - kHeaderBytes - 8))
+    return bad("checksum mismatch (corrupt data)");
+  f.keypoints.resize(n);
+  for (auto& k : f.keypoints) {
+    float values[kKeypointFloats];
+    std::memcpy(values, in.data() + pos, sizeof(values));
+    pos += sizeof(values);
+    k = Keypoint{values[0], values[1], values[2], values[3], values[4]};
+  }
+  f.descriptors.resize(n * kSiftDescriptorSize);
+  std::memcpy(f.descriptors.data(), in.data() + pos, f.descriptors.size() * sizeof(float));
+  return f;
+}
+
+std::string Hex(std::uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+// Writes bytes to a unique temporary file in the target's directory and renames it over target.
+bool WriteAtomically(const std::filesystem::path& target, const std::string& bytes, std::string* why) {
+  static std::atomic<unsigned> counter{0};
+  std::ostringstream name;
+  name << target.filename().string() << ".tmp." << ::getpid() << "." << std::hash<std::thread::id>()(std::this_thread::get_id())
+       << "." << counter++;
+  const std::filesystem::path temp = target.parent_path() / name.str();
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.close();
+    if (!out) {
+      *why = "cannot write " + temp.string();
+      std::error_code ec;
+      std::filesystem::remove(temp, ec);
+      return false;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, target, ec);
+  if (ec) {
+    *why = "cannot rename " + temp.string() + " to " + target.string() + ": " + ec.message();
+    std::filesystem::remove(temp, ec);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::uint64_t ScanContentHash(const Scan& scan) {
+  Hasher h(0xC0FFEEULL);
+  h.AddValue(static_cast<std::int64_t>(scan.rows));
+  h.AddValue(static_cast<std::int64_t>(scan.cols));
+  h.Add(scan.points.data(), scan.points.size() * sizeof(Eigen::Vector3f));
+  h.Add(scan.reflectance.data(), scan.reflectance.size() * sizeof(float));
+  h.Add(scan.valid.data(), scan.valid.size());
+  return h.Digest();
+}
+
+std::uint64_t FeatureCacheKey(const Scan& scan, const SiftOptions& options) {
+  Hasher h(kDetectorVersion);
+  h.AddValue(ScanContentHash(scan));
+  h.AddValue(static_cast<std::int64_t>(options.max_features));
+  h.AddValue(options.contrast_threshold);
+  h.AddValue(options.edge_threshold);
+  h.AddValue(options.sigma);
+  h.AddValue(static_cast<std::int64_t>(options.octave_layers));
+  h.AddValue(static_cast<std::int64_t>(options.mask_erosion_px));
+  h.AddValue(static_cast<std::int64_t>(options.wrap_margin_px));
+  // The angular grid decides whether the 360° wrap applies.
+  h.Add(scan.angles.azimuth.data(), scan.angles.azimuth.size() * sizeof(float));
+  const std::string opencv = CV_VERSION;  // another OpenCV may detect differently
+  h.Add(opencv.data(), opencv.size());
+  return h.Digest();
+}
+
+std::filesystem::path FeatureCachePath(const Scan& scan, const SiftOptions& options,
+                                       const std::filesystem::path& cache_dir) {
+  return cache_dir / ("sift_" + Hex(FeatureCacheKey(scan, options)) + ".feat");
+}
+
+Expected<ScanFeatures> LoadOrDetectFeatures(const Scan& scan, const SiftOptions& options,
+                                            const std::filesystem::path& cache_dir, bool* from_cache) {
+  if (from_cache) *from_cache = false;
+  if (Status s = options.Validate(); !s) return s.error();
+  if (Status s = scan.Validate(); !s) return s.error();
+  const std::uint64_t key = FeatureCacheKey(scan, options);
+  const std::filesystem::path path = cache_dir / ("sift_" + Hex(key) + ".feat");
+
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) {
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.bad()) {
+      Expected<ScanFeatures> cached = Deserialize(bytes, key, scan);
+      if (cached) {
+        if (from_cache) *from_cache = true;
+        return cached;
+      }
+      LogWarning("feature cache: ignoring " + path.string() + " for scan '" + scan.name + "' (" +
+                 cached.error().message + "); detecting the features again");
+    } else {
+      LogWarning("feature cache: cannot read " + path.string() + "; detecting the features of scan '" + scan.name +
+                 "' again");
+    }
+  }
+
+  Expected<ScanFeatures> features = DetectFeatures(scan, options);
+  if (!features) return features;
+  std::filesystem::create_directories(cache_dir, ec);
+  if (ec) {
+    LogWarning("feature cache: cannot create " + cache_dir.string() + " (" + ec.message() +
+               "); the features of scan '" + scan.name + "' are not cached");
+    return features;
+  }
+  std::string why;
+  if (!WriteAtomically(path, Serialize(*features, key), &why))
+    LogWarning("feature cache: " + why + "; the features of scan '" + scan.name + "' are not cached");
+  return features;
+}
+
+}  // namespace scanreg

@@ -1,0 +1,227 @@
+#include "core/features/matching.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <set>
+#include <utility>
+
+#include "feature_fixtures.h"
+
+namespace scanreg {
+namespace {
+
+void SetDescriptor(ScanFeatures& f, int i, std::initializer_list<std::pair<int, float>> entries) {
+  if (f.size() <= i) {
+    f.keypoints.resize(i + 1);
+    f.descriptors.resize(f.keypoints.size() * kSiftDescriptorSize, 0.f);
+  }
+  for (auto [dim, value] : entries) f.descriptors[static_cast<std::size_t>(i) * kSiftDescriptorSize + dim] = value;
+}
+
+// Query 0 at the origin: train 0 at distance 50, train 1 at 100 -> d1/d2 = 0.5, accepted.
+// Query 1 at 1000 e5: train 2 at distance 70, train 3 at 100 -> 0.7, rejected at t_des = 0.66.
+// Every other train descriptor is > 900 away from each query.
+void HandMade(ScanFeatures* query, ScanFeatures* train) {
+  SetDescriptor(*query, 0, {});
+  SetDescriptor(*query, 1, {{5, 1000.f}});
+  SetDescriptor(*train, 0, {{0, 50.f}});
+  SetDescriptor(*train, 1, {{1, 100.f}});
+  SetDescriptor(*train, 2, {{5, 1000.f}, {6, 70.f}});
+  SetDescriptor(*train, 3, {{5, 1000.f}, {7, 100.f}});
+}
+
+class RatioTest : public ::testing::TestWithParam<MatchMethod> {};
+
+TEST_P(RatioTest, AcceptsHalfRejectsSevenTenthsAtTDes066) {
+  ScanFeatures query, train;
+  HandMade(&query, &train);
+  MatchOptions o;
+  o.method = GetParam();
+  ASSERT_EQ(o.ratio, 0.66);
+  const auto matches = MatchRatio(query, train, o);
+  ASSERT_EQ(matches.size(), 1u);
+  EXPECT_EQ(matches[0].query, 0);
+  EXPECT_EQ(matches[0].train, 0);
+  EXPECT_NEAR(matches[0].distance, 50.f, 1e-3);
+  // At t_des = 0.75 both pass; at 0.5 (strict) neither.
+  o.ratio = 0.75;
+  const auto loose = MatchRatio(query, train, o);
+  ASSERT_EQ(loose.size(), 2u);
+  EXPECT_EQ(loose[1].query, 1);
+  EXPECT_EQ(loose[1].train, 2);
+  EXPECT_NEAR(loose[1].distance, 70.f, 1e-3);
+  o.ratio = 0.5;
+  EXPECT_TRUE(MatchRatio(query, train, o).empty());
+}
+
+TEST_P(RatioTest, CrossCheckRequiresMutualNearestNeighbours) {
+  ScanFeatures query, train;
+  HandMade(&query, &train);
+  // A second query right next to train 0 is train 0's nearest: query 0 -> train 0 is not mutual.
+  SetDescriptor(query, 2, {{0, 45.f}});
+  MatchOptions o;
+  o.method = GetParam();
+  o.ratio = 0.75;
+  EXPECT_EQ(MatchRatio(query, train, o).size(), 3u);  // q0->t0, q1->t2, q2->t0
+  o.cross_check = true;
+  const auto mutual = MatchRatio(query, train, o);
+  ASSERT_EQ(mutual.size(), 2u);
+  EXPECT_EQ(mutual[0].query, 1);
+  EXPECT_EQ(mutual[1].query, 2);
+  EXPECT_EQ(mutual[1].train, 0);
+}
+
+TEST_P(RatioTest, TooFewTrainDescriptorsGiveNoMatch) {
+  ScanFeatures query, train;
+  SetDescriptor(query, 0, {});
+  SetDescriptor(train, 0, {{0, 1.f}});
+  MatchOptions o;
+  o.method = GetParam();
+  EXPECT_TRUE(MatchRatio(query, train, o).empty());
+  EXPECT_TRUE(MatchRatio(query, ScanFeatures(), o).empty());
+  EXPECT_TRUE(MatchRatio(ScanFeatures(), train, o).empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, RatioTest, ::testing::Values(MatchMethod::kExact, MatchMethod::kFlann, MatchMethod::kBruteForce));
+
+TEST(MatchOptionsTest, ValidateRejectsNonsense) {
+  EXPECT_TRUE(MatchOptions().Validate().ok());
+  MatchOptions o;
+  o.ratio = 0;
+  EXPECT_FALSE(o.Validate().ok());
+  o.ratio = 1.2;
+  EXPECT_FALSE(o.Validate().ok());
+  o = MatchOptions();
+  o.flann_checks = 0;
+  EXPECT_FALSE(o.Validate().ok());
+}
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::set<std::pair<int, int>> AsSet(const std::vector<FeatureMatch>& matches) {
+  std::set<std::pair<int, int>> out;
+  for (const auto& m : matches) out.insert({m.query, m.train});
+  return out;
+}
+
+TEST_P(RatioTest, BothWaysEqualsTwoOneWayCalls) {
+  const auto& scans = test::SmallProject();
+  const auto a = DetectFeatures(scans[0]);
+  const auto b = DetectFeatures(scans[1]);
+  ASSERT_TRUE(a.ok() && b.ok());
+  std::set<std::pair<int, int>> plain;
+  for (bool cross : {false, true}) {
+    MatchOptions o;
+    o.method = GetParam();
+    o.cross_check = cross;
+    const MatchIndex ia(*a, o), ib(*b, o);
+    const TwoWayMatches both = MatchRatioBothWays(ia, ib, o);
+    const auto ab = MatchRatio(*a, ib, o, &ia);
+    const auto ba = MatchRatio(*b, ia, o, &ib);
+    ASSERT_EQ(both.a_in_b.size(), ab.size());
+    ASSERT_EQ(both.b_in_a.size(), ba.size());
+    EXPECT_GT(ab.size(), 10u);
+    for (std::size_t k = 0; k < ab.size(); ++k) {
+      EXPECT_EQ(both.a_in_b[k].query, ab[k].query);
+      EXPECT_EQ(both.a_in_b[k].train, ab[k].train);
+      EXPECT_FLOAT_EQ(both.a_in_b[k].distance, ab[k].distance);
+    }
+    for (std::size_t k = 0; k < ba.size(); ++k) EXPECT_EQ(both.b_in_a[k].train, ba[k].train);
+    if (!cross) plain = AsSet(ab);
+    for (const auto& m : ab) EXPECT_TRUE(plain.count({m.query, m.train}));  // cross-check only removes
+    if (cross) {
+      EXPECT_LT(ab.size(), plain.size());
+    }
+  }
+}
+
+// Fraction of matches whose two keypoints see world points (reference poses) within 0.3 m.
+double FractionClose(const std::vector<FeatureMatch>& matches, const Scan& sa, const ScanFeatures& fa, const Scan& sb,
+                     const ScanFeatures& fb, int* with_points) {
+  int close = 0;
+  *with_points = 0;
+  for (const auto& m : matches) {
+    Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
+    if (!test::WorldPointNear(sa, fa.keypoints[m.query].u, fa.keypoints[m.query].v, &pa)) continue;
+    if (!test::WorldPointNear(sb, fb.keypoints[m.train].u, fb.keypoints[m.train].v, &pb)) continue;
+    ++*with_points;
+    close += (pa - pb).norm() < 0.3;
+  }
+  return static_cast<double>(close) / std::max(*with_points, 1);
+}
+
+// Two neighbouring stations at W's size: the default exact method against OpenCV's brute force
+// (identical matches) and FLANN (approximate: extra matches where the true second neighbour is
+// missed); and the matches are real: their 3D points (reference poses) coincide.
+TEST(MatchingBenchmark, ExactGemmEqualsBruteForceOnFullSizeStations) {
+  const auto& scans = test::FullSizePair();
+  ASSERT_EQ(scans.size(), 2u);
+  const auto a = DetectFeatures(scans[0]);
+  const auto b = DetectFeatures(scans[1]);
+  ASSERT_TRUE(a.ok() && b.ok());
+
+  MatchOptions bf_options;
+  bf_options.method = MatchMethod::kBruteForce;
+  auto t0 = std::chrono::steady_clock::now();
+  const auto bf = MatchRatio(*a, MatchIndex(*b, bf_options), bf_options);
+  const double bf_s = Seconds(t0);
+
+  const MatchOptions exact_options;  // default
+  ASSERT_EQ(exact_options.method, MatchMethod::kExact);
+  t0 = std::chrono::steady_clock::now();
+  const MatchIndex ia(*a, exact_options), ib(*b, exact_options);
+  const double exact_build_s = Seconds(t0);
+  t0 = std::chrono::steady_clock::now();
+  const auto exact = MatchRatio(*a, ib, exact_options);
+  const double exact_s = Seconds(t0);
+  t0 = std::chrono::steady_clock::now();
+  const TwoWayMatches both = MatchRatioBothWays(ia, ib, exact_options);
+  const double both_s = Seconds(t0);
+
+  MatchOptions flann_options;
+  flann_options.method = MatchMethod::kFlann;
+  t0 = std::chrono::steady_clock::now();
+  const MatchIndex flann_index(*b, flann_options);
+  const double flann_build_s = Seconds(t0);
+  t0 = std::chrono::steady_clock::now();
+  const auto flann = MatchRatio(*a, flann_index, flann_options);
+  const double flann_s = Seconds(t0);
+
+  const auto truth = AsSet(bf);
+  int exact_common = 0, flann_common = 0;
+  for (const auto& m : exact) exact_common += truth.count({m.query, m.train});
+  for (const auto& m : flann) flann_common += truth.count({m.query, m.train});
+  std::printf("features %d x %d\n  brute force: %zu matches, %.3f s\n"
+              "  exact GEMM: %zu matches (%d common), index %.3f s, one way %.3f s, both ways %.3f s\n"
+              "  FLANN 4 trees/%d checks: %zu matches (%d common), index %.3f s, search %.3f s\n",
+              a->size(), b->size(), bf.size(), bf_s, exact.size(), exact_common, exact_build_s, exact_s, both_s,
+              flann_options.flann_checks, flann.size(), flann_common, flann_build_s, flann_s);
+  ASSERT_GT(bf.size(), 50u);
+  EXPECT_EQ(exact.size(), bf.size());
+  EXPECT_EQ(exact_common, static_cast<int>(bf.size()));
+  EXPECT_EQ(AsSet(both.a_in_b), AsSet(exact));
+  EXPECT_GE(flann_common, 0.97 * bf.size());
+
+  // Geometric truth. Not all matches are right: the simulated street repeats window grids and
+  // textures (like W's periodic façades), which is why W follows with RANSAC and a consistency check.
+  int with_points = 0;
+  const double plain = FractionClose(exact, scans[0], *a, scans[1], *b, &with_points);
+  EXPECT_GE(with_points, 0.9 * exact.size());
+  MatchOptions cross = exact_options;
+  cross.cross_check = true;
+  const auto mutual = MatchRatio(*a, ib, cross, &ia);
+  int mutual_with_points = 0;
+  const double mutual_close = FractionClose(mutual, scans[0], *a, scans[1], *b, &mutual_with_points);
+  std::printf("  within 0.3 m in the world: %.1f %% of %d matches; with cross-check %.1f %% of %d\n", 100 * plain,
+              with_points, 100 * mutual_close, mutual_with_points);
+  EXPECT_GE(plain, 0.40);
+  EXPECT_GE(mutual_close, 0.50);
+  EXPECT_LT(mutual.size(), exact.size());
+}
+
+}  // namespace
+}  // namespace scanreg
