@@ -18,6 +18,7 @@ int RunNew(const std::vector<std::string>& args);
 int RunInfo(const std::vector<std::string>& args);
 int RunExportPoses(const std::vector<std::string>& args);
 int RunConvert(const std::vector<std::string>& args);
+int RunRegister(const std::vector<std::string>& args);
 
 const std::vector<Command>& Commands();
 

@@ -55,9 +55,11 @@ json LinkToJson(const LinkRecord& l) {
               {"consistent", l.consistent},
               {"rms_m", l.rms_m},
               {"overlap", l.overlap},
+              {"conflict", l.conflict},
               {"iterations", l.iterations},
               {"seconds", l.seconds},
               {"parent_from_child", PoseToJson(l.parent_from_child)},
+              {"loop_check", l.loop_check},
               {"user_accepted", l.user_accepted},
               {"user_rejected", l.user_rejected}};
 }
@@ -76,8 +78,10 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
     l.consistent = j.value("consistent", 0);
     l.rms_m = j.value("rms_m", 0.0);
     l.overlap = j.value("overlap", 0.0);
+    l.conflict = j.value("conflict", 0.0);
     l.iterations = j.value("iterations", 0);
     l.seconds = j.value("seconds", 0.0);
+    l.loop_check = j.value("loop_check", false);
     l.user_accepted = j.value("user_accepted", false);
     l.user_rejected = j.value("user_rejected", false);
   } catch (const json::exception& e) {

@@ -31,9 +31,11 @@ struct LinkRecord {
   int consistent = 0;
   double rms_m = 0.0;
   double overlap = 0.0;  // fraction [0, 1]
+  double conflict = 0.0; // fraction of points in the other scan's free space [0, 1]
   int iterations = 0;
   double seconds = 0.0;
   Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
+  bool loop_check = false;     // a redundant link that verified a loop of the tree (not chained)
   bool user_accepted = false;  // the user accepted a weak link
   bool user_rejected = false;  // the user rejected the link
 };

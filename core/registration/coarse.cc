@@ -211,6 +211,10 @@ Expected<CoarseResult> EstimateCoarse(const std::vector<Correspondence3d>& corre
   PassResult second = RunPass(c, rest, options, rng, cancel, target, near_best);
   out.iterations += second.iterations;
   if (second.cancelled) return MakeError(ErrorCode::kCancelled, "coarse registration cancelled");
+  if (second.pose) {
+    out.competitor = second.pose;
+    out.competitor_support = second.score.support;
+  }
   if (second.pose && second.score.support >= options.ambiguity_ratio * out.inliers) {
     out.ambiguous = true;
     const Eigen::Isometry3d d = out.parent_from_child.inverse() * *second.pose;

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@ enum class CoarseMethod {
 };
 
 struct CoarseOptions {
-  CoarseMethod method = CoarseMethod::kEpnp;  // the paper's method
+  CoarseMethod method = CoarseMethod::k3d;
   int sample_size_epnp = 7;  // W §4.3: "small, but not minimal subsets of seven correspondences"; >= 4
   int max_iterations = 10000;  // cap on RANSAC hypotheses per pass
   double confidence = 0.999;   // adaptive stop: P(at least one all-inlier sample)
@@ -53,6 +54,10 @@ struct CoarseResult {
   double rms_m = 0.0;               // RMS 3D distance over the inliers
   bool ambiguous = false;           // a distinct pose has similar support: callers treat as failed
   std::string reason;               // why ambiguous (empty otherwise)
+  // The best distinct competitor found among the outliers (whatever its support), so that callers
+  // can verify both hypotheses geometrically.
+  std::optional<Eigen::Isometry3d> competitor;
+  int competitor_support = 0;
 };
 
 // Errors: invalid options (kInvalidArgument), fewer correspondences than a sample or than

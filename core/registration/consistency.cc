@@ -6,11 +6,13 @@
 namespace scanreg {
 
 std::vector<int> ConsistentIndices(const std::vector<Correspondence3d>& correspondences,
-                                   const Eigen::Isometry3d& parent_from_child, double threshold_m) {
+                                   const Eigen::Isometry3d& parent_from_child, double threshold_m,
+                                   double angular_rad) {
   std::vector<int> out;
-  const double t2 = threshold_m * threshold_m;
+  const double a2 = angular_rad * angular_rad;
   for (std::size_t i = 0; i < correspondences.size(); ++i) {
     const auto& c = correspondences[i];
+    const double t2 = threshold_m * threshold_m + a2 * c.child.squaredNorm();
     if ((c.parent - parent_from_child * c.child).squaredNorm() <= t2) out.push_back(static_cast<int>(i));
   }
   return out;

@@ -9,9 +9,12 @@
 
 namespace scanreg {
 
-// Indices (ascending) of the pairs with |parent - parent_from_child * child| <= threshold_m.
+// Indices (ascending) of the pairs with |parent - parent_from_child * child| <= t, where
+// t = sqrt(threshold_m^2 + (angular_rad * |child|)^2): the angular term is keypoint localisation
+// (about a pixel of angular_rad) growing with the range; 0 gives W's fixed threshold.
 std::vector<int> ConsistentIndices(const std::vector<Correspondence3d>& correspondences,
-                                   const Eigen::Isometry3d& parent_from_child, double threshold_m);
+                                   const Eigen::Isometry3d& parent_from_child, double threshold_m,
+                                   double angular_rad = 0.0);
 
 // Threshold from the scanner's range noise: max(k * sqrt(2) * range_sigma_m, floor_m).
 // Each point carries range noise sigma along its line of sight; the difference of two independent

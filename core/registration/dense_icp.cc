@@ -73,6 +73,7 @@ Status DenseIcpOptions::Validate() const {
   if (!(convergence_translation_m >= 0.0) || !(convergence_rotation_rad >= 0.0)) return bad("convergence thresholds must be >= 0");
   if (!(robust_scale_floor_m > 0.0)) return bad("robust_scale_floor_m must be > 0 metres");
   if (min_correspondences < 6) return bad("min_correspondences must be >= 6 (6 unknowns)");
+  if (max_samples < min_correspondences) return bad("max_samples must be >= min_correspondences");
   return Status::Ok();
 }
 
@@ -82,7 +83,8 @@ Expected<IcpResult> DenseIcp(const Scan& parent, const Scan& child, Eigen::Isome
   if (Status s = parent.Validate(); !s) return s.error();
   if (Status s = child.Validate(); !s) return s.error();
   const std::vector<Eigen::Vector3d> target = VoxelDownsample(ValidPoints(parent), options.voxel_m);
-  const std::vector<Eigen::Vector3d> source = VoxelDownsample(ValidPoints(child), options.voxel_m);
+  const std::vector<Eigen::Vector3d> source = ThinEvenly(VoxelDownsample(ValidPoints(child), options.voxel_m),
+                                                         options.max_samples);
   if (target.empty() || source.empty())
     return MakeError(ErrorCode::kInvalidArgument, "dense ICP: scan '" + (target.empty() ? parent.name : child.name) +
                                                       "' has no valid points");

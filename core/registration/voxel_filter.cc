@@ -53,4 +53,13 @@ std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>&
   return out;
 }
 
+std::vector<Eigen::Vector3d> ThinEvenly(std::vector<Eigen::Vector3d> points, int max_count) {
+  if (max_count <= 0 || static_cast<int>(points.size()) <= max_count) return points;
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(max_count);
+  const double stride = double(points.size()) / max_count;
+  for (int i = 0; i < max_count; ++i) out.push_back(points[static_cast<std::size_t>(i * stride)]);
+  return out;
+}
+
 }  // namespace scanreg

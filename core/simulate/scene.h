@@ -83,7 +83,8 @@ class Scene {
 struct SceneOptions {
   enum class Kind {
     kStreet,           // varied buildings, textures, poles, cars, kiosks, benches; some uniform surfaces
-    kRepeatedWindows,  // identical façades with identical window grids, little distinctive texture
+    kRepeatedWindows,  // identical buildings and window grids on both sides, plain ground; only the
+                       // street furniture (posts, trees, cars) is distinctive
   };
   Kind kind = Kind::kStreet;
   std::uint64_t seed = 1;

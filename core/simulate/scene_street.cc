@@ -299,7 +299,7 @@ Scene MakeScene(const SceneOptions& options) {
   scene.AddRectangle(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), 0.5 * o.street_length_m + 300.0, 300.0,
                      scene.AddTexture(GroundTexture(o, rng, repeated)));
   StreetBuildings(o, b);
-  if (!repeated) StreetFurniture(o, b);
+  StreetFurniture(o, b);  // real streets always hold some unique objects, even between identical façades
   if (o.far_site) FarSite(b);
   scene.Build();
   return scene;

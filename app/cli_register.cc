@@ -1,0 +1,194 @@
+// scanreg-cli register: automatic registration of a project (W §2), with the evidence printed.
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "app/cli_commands.h"
+#include "app/cli_util.h"
+#include "core/geometry/transform.h"
+#include "core/io/project.h"
+#include "core/pipeline/project_scans.h"
+#include "core/pipeline/register_project.h"
+
+namespace scanreg::cli {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+
+void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& scans,
+               const std::vector<pipeline::ReferenceError>& errors) {
+  const int n = static_cast<int>(scans.size());
+  std::printf("\nconfusion matrix C(i,j): matches of i's features in j (diagonal: features of i)\n%8s", "");
+  for (int j = 0; j < n; ++j) std::printf(" %7s", scans[j].name.c_str());
+  std::printf("\n");
+  for (int i = 0; i < n; ++i) {
+    std::printf("%8s", scans[i].name.c_str());
+    for (int j = 0; j < n; ++j) std::printf(" %7d", r.confusion(i, j));
+    std::printf("\n");
+  }
+  std::printf("\nscan order (root %s):\n", scans[r.root].name.c_str());
+  for (const auto& s : r.scans) {
+    if (s.parent >= 0) std::printf("  %s <- %s\n", scans[s.parent].name.c_str(), s.name.c_str());
+  }
+  std::printf("\n%-8s %-8s %-14s %7s %8s %8s %10s %8s %9s %6s %7s  %-6s %s\n", "parent", "child", "method", "matches",
+              "reliable", "inliers", "consistent", "RMS mm", "overlap %", "iter", "time s", "status", "reason");
+  for (const io::LinkRecord& l : r.links) {
+    std::printf("%-8s %-8s %-14s %7d %8d %8d %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(), l.child.c_str(),
+                (l.loop_check ? "check:" + l.method : l.method).c_str(), l.matches, l.reliable, l.ransac_inliers, l.consistent, l.rms_m * 1000,
+                l.overlap * 100, l.conflict * 100, l.iterations, l.seconds, io::LinkStatusName(l.status), l.reason.c_str());
+  }
+  bool any_reference = false;
+  for (const auto& e : errors) any_reference |= e.available;
+  std::printf("\n%-8s %-13s", "scan", "status");
+  if (any_reference) std::printf(" %12s %12s %12s %12s", "coarse mm", "coarse deg", "fine mm", "fine deg");
+  std::printf("\n");
+  for (std::size_t i = 0; i < r.scans.size(); ++i) {
+    const auto& s = r.scans[i];
+    std::printf("%-8s %-13s", s.name.c_str(), s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered")
+                                                           : "UNREGISTERED");
+    if (any_reference && errors[i].available) {
+      if (errors[i].has_coarse) {
+        std::printf(" %12.1f %12.4f", errors[i].coarse_position_m * 1000, errors[i].coarse_angle_rad * kDeg);
+      } else {
+        std::printf(" %12s %12s", "-", "-");
+      }
+      std::printf(" %12.1f %12.4f", errors[i].position_m * 1000, errors[i].angle_rad * kDeg);
+    }
+    if (!s.registered) std::printf("  %s", s.reason.c_str());
+    std::printf("\n");
+  }
+  std::printf("\ntime: features %.1f s (%d from cache), matching %.1f s, pairs %.1f s, total %.1f s\n",
+              r.seconds_features, r.features_from_cache, r.seconds_matching, r.seconds_pairs, r.seconds_total);
+}
+
+nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<Scan>& scans,
+                      const std::vector<pipeline::ReferenceError>& errors) {
+  using nlohmann::json;
+  json confusion = json::array();
+  for (int i = 0; i < r.confusion.rows(); ++i) {
+    json row = json::array();
+    for (int j = 0; j < r.confusion.cols(); ++j) row.push_back(r.confusion(i, j));
+    confusion.push_back(row);
+  }
+  json links = json::array();
+  for (const io::LinkRecord& l : r.links) {
+    links.push_back({{"parent", l.parent}, {"child", l.child}, {"method", l.method},
+                     {"status", io::LinkStatusName(l.status)}, {"reason", l.reason}, {"matches", l.matches},
+                     {"reliable", l.reliable}, {"ransac_inliers", l.ransac_inliers}, {"consistent", l.consistent},
+                     {"rms_m", l.rms_m}, {"overlap", l.overlap}, {"conflict", l.conflict}, {"iterations", l.iterations},
+                     {"seconds", l.seconds}, {"loop_check", l.loop_check}});
+  }
+  json out_scans = json::array();
+  for (std::size_t i = 0; i < r.scans.size(); ++i) {
+    const auto& s = r.scans[i];
+    const auto m = RowMajorFromIsometry(s.world_from_scan);
+    json js{{"name", s.name},
+            {"registered", s.registered},
+            {"parent", s.parent >= 0 ? json(scans[s.parent].name) : json(nullptr)},
+            {"reason", s.reason},
+            {"world_from_scan", std::vector<double>(m.begin(), m.end())}};
+    if (errors[i].available) {
+      js["error_position_m"] = errors[i].position_m;
+      js["error_angle_deg"] = errors[i].angle_rad * kDeg;
+      if (errors[i].has_coarse) {
+        js["coarse_error_position_m"] = errors[i].coarse_position_m;
+        js["coarse_error_angle_deg"] = errors[i].coarse_angle_rad * kDeg;
+      }
+    }
+    out_scans.push_back(js);
+  }
+  std::vector<std::string> names;
+  for (const Scan& s : scans) names.push_back(s.name);
+  return json{{"scans", out_scans},     {"names", names},
+              {"root", scans[r.root].name}, {"confusion", confusion},
+              {"links", links},         {"seconds", {{"features", r.seconds_features},
+                                                      {"matching", r.seconds_matching},
+                                                      {"pairs", r.seconds_pairs},
+                                                      {"total", r.seconds_total}}}};
+}
+
+}  // namespace
+
+int RunRegister(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp(
+      "register", "PROJECT.scanreg.json [options]   registers every scan and saves the project", argv,
+      {{"root", true, false, "NAME     root scan of the scan order (default: tail of the heaviest edge)"},
+       {"parent", true, true, "SCAN=PARENT   register SCAN to PARENT (repeatable; saved in the project)"},
+       {"coarse", true, false, "epnp|3d   coarse method: EPnP on the virtual plane (W) or 3D-3D RANSAC"},
+       {"fine", true, false, "keypoints|dense   fine method: keypoint ICP (W) or dense point-to-plane ICP"},
+       {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
+       {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
+       {"no-cache", false, false, "       do not read or write the feature cache"},
+       {"json", false, false, "       print the result as JSON"}},
+      &code);
+  if (!args) return code;
+  if (args->positional().size() != 1) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give exactly one project file"));
+  }
+  pipeline::RegisterOptions options;
+  const std::string coarse = args->Get("coarse").value_or("3d");
+  const std::string fine = args->Get("fine").value_or("dense");
+  if (coarse != "epnp" && coarse != "3d") {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --coarse must be epnp or 3d, not '" + coarse + "'"));
+  }
+  if (fine != "keypoints" && fine != "dense") {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --fine must be keypoints or dense, not '" + fine + "'"));
+  }
+  options.coarse.method = coarse == "epnp" ? CoarseMethod::kEpnp : CoarseMethod::k3d;
+  options.fine = fine == "dense" ? pipeline::FineMethod::kDense : pipeline::FineMethod::kKeypoints;
+  auto ratio = args->GetDouble("ratio", 0.66, 0.05, 1.0);
+  if (!ratio) return Fail(ratio.error());
+  options.match.ratio = *ratio;
+  auto noise = args->GetDouble("noise", 0.012, 0.0, 0.5);
+  if (!noise) return Fail(noise.error());
+  options.range_sigma_m = *noise;
+  if (auto root = args->Get("root")) options.root = *root;
+
+  auto project = io::LoadProject(args->positional()[0]);
+  if (!project) return Fail(project.error());
+  for (const std::string& p : args->GetAll("parent")) {
+    const auto eq = p.find('=');
+    const int child = eq == std::string::npos ? -1 : project->FindScan(p.substr(0, eq));
+    const int parent = eq == std::string::npos ? -1 : project->FindScan(p.substr(eq + 1));
+    if (child < 0 || parent < 0 || child == parent) {
+      return Fail(MakeError(ErrorCode::kInvalidArgument,
+                            "register: --parent '" + p + "' must be SCAN=PARENT with two different scans of the project"));
+    }
+    project->scans[child].parent_override = project->scans[parent].name;
+  }
+  if (!args->Has("no-cache")) options.feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
+  TerminalProgress progress;
+  CancelToken cancel;
+  auto loaded = pipeline::LoadProjectScans(*project, progress, cancel);
+  if (!loaded) return Fail(loaded.error());
+  std::vector<std::optional<std::string>> overrides;
+  for (const io::ProjectScan& s : project->scans) overrides.push_back(s.parent_override);
+  std::vector<std::pair<std::string, std::string>> rejected;
+  for (const io::LinkRecord& l : project->links)
+    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
+  if (!options.root && project->root) options.root = project->root;
+  auto result = pipeline::RegisterScans(*loaded, overrides, rejected, options, progress, cancel);
+  if (!result) return Fail(result.error());
+  pipeline::ApplyRegistration(*result, *project);
+  project->settings["register.coarse"] = coarse;
+  project->settings["register.fine"] = fine;
+  project->settings["register.ratio"] = std::to_string(options.match.ratio);
+  if (Status s = io::SaveProject(*project, project->file); !s) return Fail(s.error());
+  const auto errors = pipeline::ReferenceErrors(*result, *loaded);
+  if (args->Has("json")) {
+    std::printf("%s\n", ToJson(*result, *loaded, errors).dump(2).c_str());
+  } else {
+    PrintText(*result, *loaded, errors);
+  }
+  int unregistered = 0;
+  for (const auto& s : result->scans) unregistered += !s.registered;
+  if (unregistered > 0) {
+    std::fprintf(stderr, "scanreg-cli: %d of %zu scans could not be registered (reasons above); project saved\n",
+                 unregistered, result->scans.size());
+    return 3;
+  }
+  return 0;
+}
+
+}  // namespace scanreg::cli

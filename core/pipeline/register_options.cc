@@ -1,0 +1,33 @@
+#include "core/pipeline/register_options.h"
+
+namespace scanreg::pipeline {
+
+const char* FineMethodName(FineMethod method) { return method == FineMethod::kDense ? "dense" : "keypoints"; }
+const char* CoarseMethodName(CoarseMethod method) { return method == CoarseMethod::kEpnp ? "epnp" : "3d"; }
+
+Status LinkThresholds::Validate() const {
+  if (min_inliers < 3 || weak_inliers < min_inliers || !(min_overlap >= 0 && min_overlap <= weak_overlap &&
+                                                         weak_overlap <= 1) ||
+      !(weak_rms_m > 0 && weak_rms_m <= max_rms_m) || !(weak_conflict >= 0 && weak_conflict <= max_conflict)) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "link thresholds: need 3 <= min_inliers <= weak_inliers, 0 <= min_overlap <= weak_overlap <= 1 "
+                     "and 0 < weak_rms <= max_rms");
+  }
+  return Status::Ok();
+}
+
+Status RegisterOptions::Validate() const {
+  for (Status s : {sift.Validate(), match.Validate(), reliability.Validate(), coarse.Validate(),
+                   keypoint_icp.Validate(), dense_icp.Validate(), thresholds.Validate()}) {
+    if (!s) return s;
+  }
+  if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
+    return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m");
+  }
+  if (!(overlap_distance_m > 0 && evaluation_voxel_m > 0)) {
+    return MakeError(ErrorCode::kInvalidArgument, "overlap distance and evaluation voxel must be positive");
+  }
+  return Status::Ok();
+}
+
+}  // namespace scanreg::pipeline

@@ -1,0 +1,62 @@
+// Options of the automatic registration (W §2 with the alternatives measured in issue 3).
+#pragma once
+
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "core/common/expected.h"
+#include "core/features/matching.h"
+#include "core/features/sift.h"
+#include "core/registration/coarse.h"
+#include "core/registration/icp.h"
+#include "core/registration/reliable_points.h"
+
+namespace scanreg::pipeline {
+
+enum class FineMethod {
+  kKeypoints,  // W §2 step 9: ICP on the consistent keypoint 3D points
+  kDense,      // point-to-plane ICP on voxel-downsampled full scans, robust kernel
+};
+const char* FineMethodName(FineMethod method);
+const char* CoarseMethodName(CoarseMethod method);
+
+// When a link is ok, weak or failed. A failed link is not chained; a weak one is chained but
+// reported (the user may accept or reject it).
+struct LinkThresholds {
+  int min_inliers = 8;          // fewer coarse inliers: failed (CoarseOptions::min_inliers)
+  int weak_inliers = 15;        // fewer: weak
+  double min_overlap = 0.05;    // fraction of the child's samples near the parent; less: failed
+  double weak_overlap = 0.15;   // less: weak
+  double max_rms_m = 0.10;      // RMS of the overlap distances above this: failed
+  double weak_rms_m = 0.04;     // above this: weak (about 3 sigma of 12 mm noise)
+  double max_conflict = 0.05;   // free-space violations (visibility.h) above this: failed
+  double weak_conflict = 0.02;  // above this: weak
+  Status Validate() const;
+};
+
+struct RegisterOptions {
+  SiftOptions sift;
+  MatchOptions match;                // ratio t_des = 0.66 (W)
+  ReliabilityOptions reliability;    // t_std = 0.1 m (W)
+  CoarseOptions coarse;              // method: kEpnp (W) or k3d
+  FineMethod fine = FineMethod::kDense;
+  IcpOptions keypoint_icp;
+  DenseIcpOptions dense_icp;
+  LinkThresholds thresholds;
+  double range_sigma_m = 0.012;      // scanner range noise; sets the consistency threshold
+  double overlap_distance_m = 0.10;  // a child sample within this of the parent surface overlaps
+  double evaluation_voxel_m = 0.10;  // voxel of the overlap / RMS evaluation
+  // Loop check (beyond W): each scan is also registered to its best other neighbour; a loop that
+  // does not close within these tolerances fails both links (wrong links on repeated façades).
+  bool verify_loops = true;
+  int min_check_matches = 20;        // a neighbour needs this many matches to serve as a check
+  double loop_tolerance_m = 0.10;
+  double loop_tolerance_rad = 0.5 * M_PI / 180.0;
+  std::optional<std::string> root;   // scan name; default: tail of the heaviest edge
+  std::filesystem::path feature_cache_dir;  // empty: no cache
+  Status Validate() const;
+};
+
+}  // namespace scanreg::pipeline

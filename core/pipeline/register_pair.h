@@ -1,0 +1,46 @@
+// Registering one child scan to its parent from their feature matches: reliable 3D points,
+// coarse (EPnP or 3D RANSAC), consistency filter, fine (keypoint or dense ICP), evidence and
+// status. The unit of work of the project registration and of the GUI's pair panel.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "core/common/progress.h"
+#include "core/features/matching.h"
+#include "core/features/sift.h"
+#include "core/geometry/scan.h"
+#include "core/io/project.h"
+#include "core/pipeline/register_options.h"
+
+namespace scanreg::pipeline {
+
+// A scan with what the registration derives from it once.
+struct PreparedScan {
+  const Scan* scan = nullptr;
+  ScanFeatures features;
+  std::vector<std::uint8_t> confidence;  // W §2 step 5
+};
+
+struct PairResult {
+  io::LinkRecord link;  // evidence, status, reason, parent_from_child (after fine)
+  Eigen::Isometry3d coarse_parent_from_child = Eigen::Isometry3d::Identity();
+  bool coarse_ok = false;
+};
+
+// matches: parent's descriptors (query) matched in the child (train).
+PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, const std::vector<FeatureMatch>& matches,
+                        const RegisterOptions& options, const CancelToken& cancel);
+
+// Overlap and RMS of the child's voxel samples against the parent's, at a pose: the evidence
+// shared by every method.
+struct AlignmentEvidence {
+  double overlap = 0.0;  // fraction of child samples with a parent sample within max_distance_m
+  double rms_m = 0.0;    // RMS distance of those samples
+  double conflict = 0.0; // free-space violations, the larger of both directions (visibility.h)
+};
+AlignmentEvidence EvaluateAlignment(const Scan& parent, const Scan& child, const Eigen::Isometry3d& parent_from_child,
+                                    double voxel_m, double max_distance_m);
+
+}  // namespace scanreg::pipeline

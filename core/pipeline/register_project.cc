@@ -1,0 +1,327 @@
+#include "core/pipeline/register_project.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "core/common/log.h"
+#include "core/features/confusion.h"
+#include "core/features/feature_cache.h"
+#include "core/geometry/transform.h"
+#include "core/features/matching.h"
+#include "core/geometry/transform.h"
+#include "core/pipeline/project_scans.h"
+#include "core/pipeline/register_pair.h"
+#include "core/registration/scan_order.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    if (scans[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// The matches of a pair in both directions (parent's features as query), without duplicates:
+// the ratio test is asymmetric, so the union holds more true correspondences than either side.
+std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child) {
+  std::vector<FeatureMatch> out;
+  std::set<std::pair<int, int>> seen;
+  if (const PairMatches* pm = table.Find(parent, child)) {
+    for (const FeatureMatch& m : pm->matches)
+      if (seen.insert({m.query, m.train}).second) out.push_back(m);
+  }
+  if (const PairMatches* pm = table.Find(child, parent)) {
+    for (const FeatureMatch& m : pm->matches)
+      if (seen.insert({m.train, m.query}).second) out.push_back({m.train, m.query, m.distance});
+  }
+  return out;
+}
+
+}  // namespace
+
+Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
+                                            const std::vector<std::optional<std::string>>& parent_override,
+                                            const std::vector<std::pair<std::string, std::string>>& rejected,
+                                            const RegisterOptions& options, ProgressSink& progress,
+                                            const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  const int n = static_cast<int>(scans.size());
+  if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
+  for (const Scan& s : scans) {
+    if (s.CountValid() == 0) {
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + s.name + "' has no valid point; remove it");
+    }
+  }
+  const auto t_start = std::chrono::steady_clock::now();
+  ProjectRegistration result;
+
+  // W §2 steps 1 and 5: features and confidence maps, once per scan.
+  std::vector<PreparedScan> prepared(n);
+  auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < n; ++i) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+    progress.Report(0.3 * i / n, "features of " + scans[i].name);
+    bool cached = false;
+    Expected<ScanFeatures> f = options.feature_cache_dir.empty()
+                                   ? DetectFeatures(scans[i], options.sift)
+                                   : LoadOrDetectFeatures(scans[i], options.sift, options.feature_cache_dir, &cached);
+    if (!f) return MakeError(f.error().code, "scan '" + scans[i].name + "': " + f.error().message);
+    result.features_from_cache += cached;
+    prepared[i].scan = &scans[i];
+    prepared[i].features = std::move(*f);
+    prepared[i].confidence = ConfidenceMap(scans[i], options.reliability);
+  }
+  result.seconds_features = Since(t0);
+
+  // W §2 steps 2-3: matching and the confusion matrix.
+  t0 = std::chrono::steady_clock::now();
+  std::vector<ScanFeatures> features;
+  for (const PreparedScan& p : prepared) features.push_back(p.features);
+  SubProgress match_progress(progress, 0.3, 0.5);
+  Expected<MatchTable> table = MatchAllPairs(features, options.match, match_progress, cancel);
+  if (!table) return table.error();
+  result.confusion = table->confusion;
+  result.seconds_matching = Since(t0);
+
+  // W §2 step 4 with failure handling: register along the tree; a failed link is excluded and the
+  // tree recomputed, so the next-best edge takes its place.
+  std::optional<int> root;
+  if (options.root) {
+    root = IndexOf(scans, *options.root);
+    if (*root < 0) return MakeError(ErrorCode::kInvalidArgument, "root scan '" + *options.root + "' is not in the project");
+  }
+  std::vector<std::optional<int>> overrides(n);
+  for (int i = 0; i < n && i < static_cast<int>(parent_override.size()); ++i) {
+    if (!parent_override[i]) continue;
+    const int p = IndexOf(scans, *parent_override[i]);
+    if (p < 0) {
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "': parent override '" +
+                                                        *parent_override[i] + "' is not in the project");
+    }
+    overrides[i] = p;
+  }
+  std::vector<std::pair<int, int>> excluded;
+  for (const auto& [p, c] : rejected) {
+    const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
+    if (pi >= 0 && ci >= 0) excluded.emplace_back(pi, ci);
+  }
+  t0 = std::chrono::steady_clock::now();
+  std::map<std::pair<int, int>, PairResult> done;
+  auto link = [&](int parent, int child) -> PairResult& {
+    auto it = done.find({parent, child});
+    if (it != done.end()) return it->second;
+    progress.Report(0.5 + 0.5 * std::min<double>(done.size(), 2.0 * (n - 1)) / (2.0 * (n - 1)),
+                    "registering " + scans[child].name + " to " + scans[parent].name);
+    PairResult& r = done.emplace(std::make_pair(parent, child),
+                                 RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child),
+                                              options, cancel))
+                        .first->second;
+    LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(r.link.status) +
+            (r.link.reason.empty() ? "" : " (" + r.link.reason + ")"));
+    return r;
+  };
+  auto fail_link = [&](int parent, int child, const std::string& reason) {
+    PairResult& r = done.at({parent, child});
+    r.link.status = io::LinkStatus::kFailed;
+    r.link.reason = reason;
+    excluded.emplace_back(parent, child);
+  };
+  ScanOrder order;
+  std::vector<Eigen::Isometry3d> world(n, Eigen::Isometry3d::Identity());
+  std::vector<int> checked_with(n, -1);
+  for (int round = 0; round < 4 * n * n; ++round) {
+    Expected<ScanOrder> o = ComputeScanOrder(result.confusion, root, overrides, excluded);
+    if (!o) return o.error();
+    order = *o;
+    bool changed = false;
+    // Register along the tree; a failed link is excluded and the tree recomputed (next-best edge).
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+      if (link(parent, child).link.status == io::LinkStatus::kFailed) {
+        excluded.emplace_back(parent, child);
+        changed = true;
+        break;
+      }
+      world[child] = world[parent] * done.at({parent, child}).link.parent_from_child;
+    }
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+    if (changed || !options.verify_loops) {
+      if (changed) continue;
+      break;
+    }
+    // Loop check (beyond W): register each scan also to its best other placed neighbour and compare
+    // with the tree. Both links of a cycle that does not close are failed: a pairwise registration
+    // can be self-consistent and wrong (repeated façades), a closed loop rarely is.
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      int best = -1, best_weight = options.min_check_matches - 1;
+      for (int q : order.order) {
+        if (q == child || q == parent || order.parent[q] == child) continue;
+        if (std::find(excluded.begin(), excluded.end(), std::make_pair(q, child)) != excluded.end()) continue;
+        const int w = std::max(result.confusion(q, child), result.confusion(child, q));
+        if (w > best_weight) best = q, best_weight = w;
+      }
+      if (best < 0) continue;
+      // A check already made the other way round serves (inverted).
+      const auto reverse = done.find({child, best});
+      const bool use_reverse = reverse != done.end() && reverse->second.link.status != io::LinkStatus::kFailed;
+      const PairResult& check = use_reverse ? reverse->second : link(best, child);
+      if (check.link.status == io::LinkStatus::kFailed) continue;
+      const Eigen::Isometry3d best_from_child =
+          use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
+      if (!use_reverse) checked_with[child] = best;
+      const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
+      if (gap.position_m <= options.loop_tolerance_m && gap.angle_rad <= options.loop_tolerance_rad) continue;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans[parent].name.c_str(),
+                    scans[child].name.c_str(), scans[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
+      LogWarning(std::string(buf) + "; both links failed");
+      fail_link(parent, child, buf);
+      if (use_reverse) {
+        fail_link(child, best, buf);
+      } else {
+        fail_link(best, child, buf);
+      }
+      changed = true;
+      break;
+    }
+    if (!changed) break;
+  }
+  result.seconds_pairs = Since(t0);
+
+  // Chain world poses from the root along the tree (W §2 step 10).
+  result.root = order.root;
+  result.scans.resize(n);
+  for (int i = 0; i < n; ++i) {
+    result.scans[i].name = scans[i].name;
+    result.scans[i].reason = "no link to a registered scan: no overlapping scan with enough feature matches";
+  }
+  ScanRegistration& r0 = result.scans[order.root];
+  r0.registered = true;
+  r0.reason.clear();
+  r0.world_from_scan = r0.coarse_world_from_scan = scans[order.root].world_from_scan;
+  r0.has_coarse = true;
+  for (int child : order.order) {
+    const int parent = order.parent[child];
+    if (parent < 0) continue;
+    const PairResult& pr = done.at({parent, child});
+    ScanRegistration& s = result.scans[child];
+    const ScanRegistration& p = result.scans[parent];
+    s.registered = true;
+    s.reason.clear();
+    s.parent = parent;
+    s.world_from_scan = p.world_from_scan * pr.link.parent_from_child;
+    s.has_coarse = p.has_coarse && pr.coarse_ok;
+    if (s.has_coarse) s.coarse_world_from_scan = p.coarse_world_from_scan * pr.coarse_parent_from_child;
+    result.links.push_back(pr.link);
+  }
+  // Loop-check links that closed (evidence, not chained).
+  for (int child = 0; child < n; ++child) {
+    if (checked_with[child] < 0 || !result.scans[child].registered) continue;
+    const auto it = done.find({checked_with[child], child});
+    if (it == done.end() || it->second.link.status == io::LinkStatus::kFailed) continue;
+    if (order.parent[child] == checked_with[child]) continue;
+    io::LinkRecord l = it->second.link;
+    l.loop_check = true;
+    result.links.push_back(l);
+  }
+  // Failed attempts, and the reason of each scan left out.
+  for (const auto& [key, pr] : done) {
+    if (pr.link.status != io::LinkStatus::kFailed) continue;
+    result.links.push_back(pr.link);
+    ScanRegistration& s = result.scans[key.second];
+    if (!s.registered) s.reason = "link to " + scans[key.first].name + " failed: " + pr.link.reason;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!overrides[i] || result.scans[i].registered) continue;
+    auto it = done.find({*overrides[i], i});
+    result.scans[i].reason = it != done.end()
+                                 ? "the link to its parent override " + scans[*overrides[i]].name +
+                                       " failed (" + it->second.link.reason + "); remove or change the override"
+                                 : "its parent override " + scans[*overrides[i]].name + " is not registered";
+  }
+  result.seconds_total = Since(t_start);
+  progress.Report(1.0, "registration done");
+  return result;
+}
+
+void ApplyRegistration(const ProjectRegistration& result, io::Project& project) {
+  for (std::size_t i = 0; i < project.scans.size() && i < result.scans.size(); ++i) {
+    io::ProjectScan& ps = project.scans[i];
+    ps.registered = result.scans[i].registered;
+    if (ps.registered) ps.world_from_scan = result.scans[i].world_from_scan;
+  }
+  // Keep the user's accept / reject decisions on links that were recomputed.
+  std::vector<io::LinkRecord> links = result.links;
+  for (io::LinkRecord& l : links) {
+    for (const io::LinkRecord& old : project.links) {
+      if (old.parent == l.parent && old.child == l.child) {
+        l.user_accepted = old.user_accepted;
+        l.user_rejected = old.user_rejected;
+      }
+    }
+  }
+  for (const io::LinkRecord& old : project.links) {
+    bool kept = false;
+    for (const io::LinkRecord& l : links) kept |= old.parent == l.parent && old.child == l.child;
+    if (!kept && old.user_rejected) links.push_back(old);
+  }
+  project.links = std::move(links);
+  if (result.root >= 0) project.root = project.scans[result.root].name;
+}
+
+Expected<ProjectRegistration> RegisterProject(io::Project& project, const RegisterOptions& options,
+                                              ProgressSink& progress, const CancelToken& cancel) {
+  SubProgress load_progress(progress, 0.0, 0.2);
+  Expected<std::vector<Scan>> scans = LoadProjectScans(project, load_progress, cancel);
+  if (!scans) return scans.error();
+  std::vector<std::optional<std::string>> overrides;
+  for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
+  std::vector<std::pair<std::string, std::string>> rejected;
+  for (const io::LinkRecord& l : project.links)
+    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
+  RegisterOptions opts = options;
+  if (!opts.root && project.root) opts.root = project.root;
+  SubProgress reg_progress(progress, 0.2, 1.0);
+  Expected<ProjectRegistration> result = RegisterScans(*scans, overrides, rejected, opts, reg_progress, cancel);
+  if (!result) return result.error();
+  ApplyRegistration(*result, project);
+  return result;
+}
+
+std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans) {
+  std::vector<ReferenceError> errors(scans.size());
+  if (result.root < 0 || !scans[result.root].reference_world_from_scan) return errors;
+  const Eigen::Isometry3d ref_root = *scans[result.root].reference_world_from_scan;
+  const ScanRegistration& root = result.scans[result.root];
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const ScanRegistration& s = result.scans[i];
+    if (!s.registered || !scans[i].reference_world_from_scan) continue;
+    const Eigen::Isometry3d ref = ref_root.inverse() * *scans[i].reference_world_from_scan;
+    const PoseError fine = ComparePoses(root.world_from_scan.inverse() * s.world_from_scan, ref);
+    errors[i].available = true;
+    errors[i].position_m = fine.position_m;
+    errors[i].angle_rad = fine.angle_rad;
+    if (s.has_coarse) {
+      const PoseError coarse = ComparePoses(root.coarse_world_from_scan.inverse() * s.coarse_world_from_scan, ref);
+      errors[i].has_coarse = true;
+      errors[i].coarse_position_m = coarse.position_m;
+      errors[i].coarse_angle_rad = coarse.angle_rad;
+    }
+  }
+  return errors;
+}
+
+}  // namespace scanreg::pipeline

@@ -1,0 +1,64 @@
+// Automatic registration of a whole project (W §2): features, confusion matrix, scan order,
+// pairwise registration along the tree with failed links replaced by the next-best edge, and
+// world poses chained from the root. The CLI's `register` and the GUI both run this.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/io/project.h"
+#include "core/pipeline/register_options.h"
+
+namespace scanreg::pipeline {
+
+struct ScanRegistration {
+  std::string name;
+  bool registered = false;
+  std::string reason;  // why not registered
+  int parent = -1;     // index of the scan it was registered to; -1 for the root
+  Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+  bool has_coarse = false;  // world pose from the coarse links only (W fig. 6 "after coarse")
+  Eigen::Isometry3d coarse_world_from_scan = Eigen::Isometry3d::Identity();
+};
+
+struct ProjectRegistration {
+  Eigen::MatrixXi confusion;  // C(i, j), W §2 step 3
+  int root = -1;
+  std::vector<ScanRegistration> scans;
+  std::vector<io::LinkRecord> links;  // tree links first (in placement order), then failed attempts
+  int features_from_cache = 0;
+  double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
+};
+
+// scans: with their current world_from_scan (the root keeps its own); parent_override by scan
+// name (empty optional = automatic); rejected: (parent, child) links the user rejected.
+Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
+                                            const std::vector<std::optional<std::string>>& parent_override,
+                                            const std::vector<std::pair<std::string, std::string>>& rejected,
+                                            const RegisterOptions& options, ProgressSink& progress,
+                                            const CancelToken& cancel);
+
+// Writes the result into the project: poses, registered flags, links and root.
+void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
+
+// Loads the project's scans, registers them with the project's overrides and rejections, and
+// updates the project (not saved).
+Expected<ProjectRegistration> RegisterProject(io::Project& project, const RegisterOptions& options,
+                                              ProgressSink& progress, const CancelToken& cancel);
+
+// Error of a registered pose against the reference, both taken relative to the root (so the
+// datum of the registration does not matter).
+struct ReferenceError {
+  bool available = false;
+  double position_m = 0, angle_rad = 0;                 // after fine
+  bool has_coarse = false;
+  double coarse_position_m = 0, coarse_angle_rad = 0;   // after coarse
+};
+std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans);
+
+}  // namespace scanreg::pipeline

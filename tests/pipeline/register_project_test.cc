@@ -1,0 +1,168 @@
+// End-to-end registration of simulated projects with known poses (issue 3's acceptance tests).
+#include "core/pipeline/register_project.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/geometry/transform.h"
+#include "core/simulate/project_sim.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+
+SimulatedProjectOptions StreetOptions(int stations, bool far_station = false) {
+  SimulatedProjectOptions o;
+  o.stations = stations;
+  o.scanner.cols = 1500;
+  o.scanner.rows = 375;
+  o.scanner.range_noise_m = 0.012;
+  o.seed = o.scanner.seed = o.scene.seed = 3;
+  o.add_far_station = far_station;
+  return o;
+}
+
+std::vector<Scan> Simulate(const SimulatedProjectOptions& o) {
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> scans = SimulateProject(o, progress, cancel);
+  EXPECT_TRUE(scans.ok()) << scans.error().ToString();
+  return scans.ok() ? std::move(*scans) : std::vector<Scan>{};
+}
+
+Expected<ProjectRegistration> Register(const std::vector<Scan>& scans, const RegisterOptions& options,
+                                       std::vector<std::optional<std::string>> overrides = {}) {
+  overrides.resize(scans.size());
+  NullProgress progress;
+  CancelToken cancel;
+  return RegisterScans(scans, overrides, {}, options, progress, cancel);
+}
+
+// Error of a link's relative pose against the truth.
+PoseError LinkError(const io::LinkRecord& l, const std::vector<Scan>& scans) {
+  const Scan* p = nullptr;
+  const Scan* c = nullptr;
+  for (const Scan& s : scans) {
+    if (s.name == l.parent) p = &s;
+    if (s.name == l.child) c = &s;
+  }
+  const Eigen::Isometry3d truth = p->reference_world_from_scan->inverse() * *c->reference_world_from_scan;
+  return ComparePoses(l.parent_from_child, truth);
+}
+
+class StreetProject : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { scans_ = new std::vector<Scan>(Simulate(StreetOptions(6))); }
+  static void TearDownTestSuite() { delete scans_; }
+  static std::vector<Scan>* scans_;
+};
+std::vector<Scan>* StreetProject::scans_ = nullptr;
+
+TEST_F(StreetProject, EveryScanRegisteredWithinTwoCentimetresAndATenthOfADegree) {
+  const std::vector<Scan>& scans = *scans_;
+  ASSERT_EQ(scans.size(), 6u);
+  Expected<ProjectRegistration> r = Register(scans, RegisterOptions{});
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  const std::vector<ReferenceError> errors = ReferenceErrors(*r, scans);
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    ASSERT_TRUE(r->scans[i].registered) << scans[i].name << ": " << r->scans[i].reason;
+    ASSERT_TRUE(errors[i].available);
+    EXPECT_LE(errors[i].position_m, 0.02) << scans[i].name;
+    EXPECT_LE(errors[i].angle_rad * kDeg, 0.1) << scans[i].name;
+  }
+  // The tree joins neighbouring stations (true distance below 2.5 station spacings).
+  for (const ScanRegistration& s : r->scans) {
+    if (s.parent < 0) continue;
+    const Scan& child = scans[&s - r->scans.data()];
+    const double d = (scans[s.parent].reference_world_from_scan->translation() -
+                      child.reference_world_from_scan->translation()).norm();
+    EXPECT_LT(d, 12.5) << scans[s.parent].name << " <- " << child.name;
+  }
+  // The confusion matrix: diagonal = feature counts, neighbours share more matches than far scans.
+  EXPECT_GT(r->confusion(0, 0), 500);
+  EXPECT_GT(r->confusion(0, 1), r->confusion(0, 5));
+  // Every tree link carries its evidence.
+  int tree_links = 0;
+  for (const io::LinkRecord& l : r->links) {
+    if (l.status == io::LinkStatus::kFailed || l.loop_check) continue;
+    ++tree_links;
+    EXPECT_GE(l.consistent, 8);
+    EXPECT_GT(l.overlap, 0.15) << l.parent << "-" << l.child;
+    EXPECT_LT(l.rms_m, 0.03) << l.parent << "-" << l.child;
+  }
+  EXPECT_EQ(tree_links, 5);
+}
+
+TEST(RegisterProjectTest, ParentOverrideChangesTheChain) {
+  SimulatedProjectOptions o = StreetOptions(4);
+  o.spacing_m = 3.0;  // close stations, so that a scan two stations away is a registrable parent
+  const std::vector<Scan> scans = Simulate(o);
+  RegisterOptions options;
+  options.root = "s01";
+  Expected<ProjectRegistration> automatic = Register(scans, options);
+  ASSERT_TRUE(automatic.ok());
+  // Ask for s04 to hang off s02 — a choice the automatic tree did not make.
+  const int s02 = 1, s04 = 3;
+  ASSERT_NE(automatic->scans[s04].parent, s02) << "pick another pair for this test";
+  std::vector<std::optional<std::string>> overrides(scans.size());
+  overrides[s04] = "s02";
+  Expected<ProjectRegistration> manual = Register(scans, options, overrides);
+  ASSERT_TRUE(manual.ok()) << manual.error().ToString();
+  EXPECT_EQ(manual->scans[s04].parent, s02);
+  ASSERT_TRUE(manual->scans[s04].registered) << manual->scans[s04].reason;
+  const std::vector<ReferenceError> errors = ReferenceErrors(*manual, scans);
+  EXPECT_LE(errors[s04].position_m, 0.03);
+}
+
+TEST(RegisterProjectTest, FarStationIsReportedUnregisteredAndTheOthersSucceed) {
+  const std::vector<Scan> scans = Simulate(StreetOptions(4, /*far_station=*/true));
+  ASSERT_EQ(scans.size(), 5u);
+  Expected<ProjectRegistration> r = Register(scans, RegisterOptions{});
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  const std::vector<ReferenceError> errors = ReferenceErrors(*r, scans);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_TRUE(r->scans[i].registered) << scans[i].name << ": " << r->scans[i].reason;
+    EXPECT_LE(errors[i].position_m, 0.02) << scans[i].name;
+  }
+  EXPECT_FALSE(r->scans[4].registered);
+  EXPECT_FALSE(r->scans[4].reason.empty());
+  EXPECT_NE(r->root, 4);
+}
+
+TEST(RegisterProjectTest, RepeatedWindowsNeverYieldAWrongAcceptedLink) {
+  SimulatedProjectOptions o = StreetOptions(5);
+  o.scene.kind = SceneOptions::Kind::kRepeatedWindows;
+  const std::vector<Scan> scans = Simulate(o);
+  for (CoarseMethod method : {CoarseMethod::kEpnp, CoarseMethod::k3d}) {
+    RegisterOptions options;
+    options.coarse.method = method;
+    Expected<ProjectRegistration> r = Register(scans, options);
+    ASSERT_TRUE(r.ok()) << r.error().ToString();
+    for (const io::LinkRecord& l : r->links) {
+      if (l.status == io::LinkStatus::kFailed) {
+        EXPECT_FALSE(l.reason.empty());
+        continue;
+      }
+      const PoseError e = LinkError(l, scans);
+      EXPECT_LT(e.position_m, 0.10) << l.parent << " <- " << l.child << " accepted with a wrong pose";
+      EXPECT_LT(e.angle_rad * kDeg, 0.5) << l.parent << " <- " << l.child;
+    }
+  }
+}
+
+TEST(RegisterProjectTest, NonsenseOptionsAndTooFewScansAreErrors) {
+  RegisterOptions bad;
+  bad.match.ratio = 0.0;
+  const std::vector<Scan> one(1, Scan("a", 4, 4));
+  EXPECT_EQ(Register(one, RegisterOptions{}).error().code, ErrorCode::kInvalidArgument);
+  std::vector<Scan> two = {Scan("a", 4, 4), Scan("b", 4, 4)};
+  Expected<ProjectRegistration> r = Register(two, RegisterOptions{});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("'a'"), std::string::npos) << "an empty scan is named";
+  EXPECT_FALSE(Register(two, bad).ok());
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
