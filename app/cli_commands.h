@@ -2,6 +2,9 @@
 #pragma once
 
 #include <string>
+
+#include "core/io/project.h"
+#include "core/pipeline/register_options.h"
 #include <vector>
 
 namespace scanreg::cli {
@@ -21,5 +24,9 @@ int RunConvert(const std::vector<std::string>& args);
 int RunRegister(const std::vector<std::string>& args);
 
 const std::vector<Command>& Commands();
+
+// Registers the project's scans, saves the project and prints the evidence (text or JSON).
+// Returns 0 when every scan is registered, 3 when some are not, another code on errors.
+int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json);
 
 }  // namespace scanreg::cli

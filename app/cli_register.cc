@@ -109,6 +109,37 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
 
 }  // namespace
 
+int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json) {
+  TerminalProgress progress;
+  CancelToken cancel;
+  auto loaded = pipeline::LoadProjectScans(project, progress, cancel);
+  if (!loaded) return Fail(loaded.error());
+  std::vector<std::optional<std::string>> overrides;
+  for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
+  std::vector<std::pair<std::string, std::string>> rejected;
+  for (const io::LinkRecord& l : project.links)
+    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
+  if (!options.root && project.root) options.root = project.root;
+  auto result = pipeline::RegisterScans(*loaded, overrides, rejected, options, progress, cancel);
+  if (!result) return Fail(result.error());
+  pipeline::ApplyRegistration(*result, project);
+  if (Status s = io::SaveProject(project, project.file); !s) return Fail(s.error());
+  const auto errors = pipeline::ReferenceErrors(*result, *loaded);
+  if (json) {
+    std::printf("%s\n", ToJson(*result, *loaded, errors).dump(2).c_str());
+  } else {
+    PrintText(*result, *loaded, errors);
+  }
+  int unregistered = 0;
+  for (const auto& s : result->scans) unregistered += !s.registered;
+  if (unregistered > 0) {
+    std::fprintf(stderr, "scanreg-cli: %d of %zu scans could not be registered (reasons above); project saved\n",
+                 unregistered, result->scans.size());
+    return 3;
+  }
+  return 0;
+}
+
 int RunRegister(const std::vector<std::string>& argv) {
   int code = 0;
   auto args = ParseOrHelp(
@@ -158,37 +189,10 @@ int RunRegister(const std::vector<std::string>& argv) {
     project->scans[child].parent_override = project->scans[parent].name;
   }
   if (!args->Has("no-cache")) options.feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
-  TerminalProgress progress;
-  CancelToken cancel;
-  auto loaded = pipeline::LoadProjectScans(*project, progress, cancel);
-  if (!loaded) return Fail(loaded.error());
-  std::vector<std::optional<std::string>> overrides;
-  for (const io::ProjectScan& s : project->scans) overrides.push_back(s.parent_override);
-  std::vector<std::pair<std::string, std::string>> rejected;
-  for (const io::LinkRecord& l : project->links)
-    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
-  if (!options.root && project->root) options.root = project->root;
-  auto result = pipeline::RegisterScans(*loaded, overrides, rejected, options, progress, cancel);
-  if (!result) return Fail(result.error());
-  pipeline::ApplyRegistration(*result, *project);
   project->settings["register.coarse"] = coarse;
   project->settings["register.fine"] = fine;
   project->settings["register.ratio"] = std::to_string(options.match.ratio);
-  if (Status s = io::SaveProject(*project, project->file); !s) return Fail(s.error());
-  const auto errors = pipeline::ReferenceErrors(*result, *loaded);
-  if (args->Has("json")) {
-    std::printf("%s\n", ToJson(*result, *loaded, errors).dump(2).c_str());
-  } else {
-    PrintText(*result, *loaded, errors);
-  }
-  int unregistered = 0;
-  for (const auto& s : result->scans) unregistered += !s.registered;
-  if (unregistered > 0) {
-    std::fprintf(stderr, "scanreg-cli: %d of %zu scans could not be registered (reasons above); project saved\n",
-                 unregistered, result->scans.size());
-    return 3;
-  }
-  return 0;
+  return RegisterAndReport(*project, options, args->Has("json"));
 }
 
 }  // namespace scanreg::cli

@@ -88,7 +88,7 @@ int RunSimulate(const std::vector<std::string>& argv) {
 
 int RunDemo(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("demo", "[--out DIR] [options]   simulate a street project (registration comes later)",
+  auto args = ParseOrHelp("demo", "[--out DIR] [options]   simulate a street project and register it end to end",
                           argv, kSimulateOptions, &code);
   if (!args) return code;
   const std::string out = args->Get("out").value_or("scanreg-demo");
@@ -101,7 +101,13 @@ int RunDemo(const std::vector<std::string>& argv) {
   auto project = pipeline::WriteSimulatedProject(*options, out, progress, cancel);
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
-  return 0;
+  std::printf("\nregistering (coarse 3D RANSAC + dense ICP, loop checks)...\n");
+  pipeline::RegisterOptions register_options;
+  register_options.range_sigma_m = options->scanner.range_noise_m;
+  register_options.feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
+  const int status = RegisterAndReport(*project, register_options, false);
+  std::printf("\nproject saved: %s\n", project->file.string().c_str());
+  return status;
 }
 
 }  // namespace scanreg::cli

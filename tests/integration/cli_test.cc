@@ -144,10 +144,42 @@ TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out.ply")) << "a failed conversion writes nothing";
 }
 
+TEST(CliTest, RegisterUpdatesTheProjectAndReportsTheFarStation) {
+  test::TempDir dir;
+  RunResult sim = RunCli("simulate --stations 3 --spacing 4 --size 1200x300 --far-station --seed 2 --out " +
+                         Quote(dir / "p"));
+  ASSERT_EQ(sim.status, 0) << sim.output;
+  const auto project_file = dir / "p" / "project.scanreg.json";
+  RunResult reg = RunCli("register " + Quote(project_file) + " --json");
+  // The far station cannot be registered: exit status 3, and the reason is in the output.
+  EXPECT_EQ(reg.status, 3) << reg.output;
+  EXPECT_NE(reg.output.find("could not be registered"), std::string::npos) << reg.output;
+  Expected<io::Project> project = io::LoadProject(project_file);
+  ASSERT_TRUE(project.ok());
+  ASSERT_EQ(project->scans.size(), 4u);
+  for (int i = 0; i < 3; ++i) {
+    const io::ProjectScan& s = project->scans[i];
+    ASSERT_TRUE(s.registered) << s.name;
+    // Relative to the root (s-root is where registration put its datum), compare with the truth.
+    const io::ProjectScan& root = project->scans[project->FindScan(project->root.value_or("s01"))];
+    const Eigen::Isometry3d est = root.world_from_scan.inverse() * s.world_from_scan;
+    const Eigen::Isometry3d ref = root.reference_world_from_scan->inverse() * *s.reference_world_from_scan;
+    EXPECT_LT(ComparePoses(est, ref).position_m, 0.03) << s.name;
+  }
+  EXPECT_FALSE(project->scans[3].registered);
+  int ok_links = 0;
+  for (const io::LinkRecord& l : project->links) ok_links += l.status != io::LinkStatus::kFailed && !l.loop_check;
+  EXPECT_EQ(ok_links, 2);
+  // A nonsense option is refused before anything runs.
+  RunResult bad = RunCli("register " + Quote(project_file) + " --coarse magic");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.output.find("--coarse"), std::string::npos);
+}
+
 TEST(CliTest, HelpListsEverySubcommand) {
   RunResult r = RunCli("--help");
   EXPECT_EQ(r.status, 0);
-  for (const char* c : {"demo", "simulate", "new", "info", "export-poses", "convert"})
+  for (const char* c : {"demo", "simulate", "register", "new", "info", "export-poses", "convert"})
     EXPECT_NE(r.output.find(c), std::string::npos) << c;
 }
 
