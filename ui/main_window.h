@@ -1,14 +1,26 @@
-// The scanreg main window: menus, a 3D view and a status bar. Panels (scan list, panorama,
-// confusion matrix, network, pair, merge, log) arrive with the desktop-application issue.
+// The scanreg main window: project menus, the 3D view, dock panels (scans, confusion matrix,
+// log) and a status bar with the running job's progress and a Cancel button. Long jobs (load,
+// demo, registration) run on the JobRunner; results come back by value.
 #pragma once
 
+#include <Eigen/Core>
 #include <QMainWindow>
+#include <any>
+#include <vector>
+
+#include "core/geometry/scan.h"
+#include "core/io/project.h"
 
 class QAction;
-class QVTKOpenGLNativeWidget;
+class QProgressBar;
+class QPushButton;
 
 namespace scanreg::ui {
 
+class ConfusionPanel;
+class JobRunner;
+class LogPanel;
+class ScanListPanel;
 class View3d;
 
 class MainWindow : public QMainWindow {
@@ -18,15 +30,51 @@ class MainWindow : public QMainWindow {
   explicit MainWindow(QWidget* parent = nullptr);
   ~MainWindow() override;
 
+  // Start jobs (return false while another job runs). Completion: jobs()->Succeeded / Failed.
+  bool OpenProject(const QString& path);
+  bool OpenDemoProject(const QString& dir);  // simulates a small street project into dir
+  bool RegisterProject();
+  bool SaveProject(const QString& path);  // synchronous, atomic
+
+  JobRunner* jobs() const { return jobs_; }
   View3d* view3d() const { return view3d_; }
+  const io::Project& project() const { return project_; }
+  const std::vector<Scan>& scans() const { return scans_; }
+  const Eigen::MatrixXi& confusion() const { return confusion_; }
+  ScanListPanel* scanList() const { return scan_list_; }
+  ConfusionPanel* confusionPanel() const { return confusion_panel_; }
+  bool dirty() const { return dirty_; }
+
   // Renders the window (including the VTK view) into a PNG; returns false on failure.
   bool SaveScreenshot(const QString& path);
 
+ protected:
+  void closeEvent(QCloseEvent* event) override;
+
  private:
   void CreateMenus();
+  void CreateDocks();
+  void OnJobSucceeded(const QString& title, std::any result);
+  void OnJobFailed(const QString& title, const QString& message, bool cancelled);
+  void SetBusy(bool busy);
+  void Refresh();
+  void ShowError(const QString& title, const QString& message);
   void ShowAbout();
 
+  io::Project project_;
+  std::vector<Scan> scans_;
+  Eigen::MatrixXi confusion_;
+  bool dirty_ = false;
+  bool colour_by_reflectance_ = false;
+
+  JobRunner* jobs_ = nullptr;
   View3d* view3d_ = nullptr;
+  ScanListPanel* scan_list_ = nullptr;
+  ConfusionPanel* confusion_panel_ = nullptr;
+  LogPanel* log_ = nullptr;
+  QProgressBar* progress_ = nullptr;
+  QPushButton* cancel_ = nullptr;
+  std::vector<QAction*> project_actions_;  // enabled only with a project and no job
 };
 
 }  // namespace scanreg::ui

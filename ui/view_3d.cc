@@ -3,7 +3,9 @@
 #include <QImage>
 #include <QVBoxLayout>
 #include <QVTKOpenGLNativeWidget.h>
+#include <vtkActor.h>
 #include <vtkAxesActor.h>
+#include <vtkCamera.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkOrientationMarkerWidget.h>
 #include <vtkRenderWindowInteractor.h>
@@ -42,6 +44,17 @@ vtkRenderer* View3d::renderer() const { return renderer_; }
 int View3d::PropCount() const { return renderer_->GetActors()->GetNumberOfItems(); }
 
 void View3d::ResetCamera() {
+  renderer_->ResetCamera();
+  render_window_->Render();
+}
+
+void View3d::SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors) {
+  renderer_->RemoveAllViewProps();
+  for (const auto& a : actors) renderer_->AddActor(a);
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  camera->SetPosition(-0.6, -1.0, 0.8);  // looking down the street from above, z up
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetViewUp(0, 0, 1);
   renderer_->ResetCamera();
   render_window_->Render();
 }

@@ -4,7 +4,10 @@
 #include <QWidget>
 #include <vtkSmartPointer.h>
 
+#include <vector>
+
 class QVTKOpenGLNativeWidget;
+class vtkActor;
 class vtkGenericOpenGLRenderWindow;
 class vtkOrientationMarkerWidget;
 class vtkRenderer;
@@ -23,6 +26,8 @@ class View3d : public QWidget {
   // Number of actors (clouds, meshes, markers) in the scene; the orientation marker is not one.
   int PropCount() const;
   void ResetCamera();
+  // Replaces the scene's actors (clouds, markers, links) and frames them, z up.
+  void SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors);
   // Grabs the rendered frame buffer as an image (empty on failure).
   QImage GrabImage();
 

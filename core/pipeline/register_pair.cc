@@ -233,12 +233,15 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.rms_m = best.evidence.rms_m;
   link.conflict = best.evidence.conflict;
   link.consistent = static_cast<int>(ConsistentIndices(corr, best.parent_from_child, threshold, angular).size());
-  if (hyps.size() > 1 && Distinct(hyps[0].parent_from_child, hyps[1].parent_from_child, options.coarse) &&
+  // Ambiguous only when both poses fit well; when neither does, the evidence below fails the link.
+  if (hyps.size() > 1 && Score(hyps[0]) >= options.thresholds.weak_overlap &&
+      Distinct(hyps[0].parent_from_child, hyps[1].parent_from_child, options.coarse) &&
       Score(hyps[1]) >= options.coarse.ambiguity_ratio * Score(hyps[0])) {
-    return fail(Format("ambiguous: two poses %.2f m apart fit the surfaces almost equally (overlap %.1f %% vs ",
+    return fail(Format("ambiguous: two poses %.2f m apart fit the surfaces almost equally (score %.2f vs ",
                        (hyps[0].parent_from_child.translation() - hyps[1].parent_from_child.translation()).norm(),
-                       100 * hyps[0].evidence.overlap) +
-                Format("%.1f %%); repeated structure — set the parent by hand", 100 * hyps[1].evidence.overlap));
+                       Score(hyps[0])) +
+                Format("%.2f: overlap discounted by free-space conflicts); repeated structure — set the parent by hand",
+                       Score(hyps[1])));
   }
   Classify(options.thresholds, link);
   if (link.status == io::LinkStatus::kOk && coarse->ambiguous) {

@@ -1,30 +1,55 @@
-// Drives the real main window under Xvfb (or QT_QPA_PLATFORM=offscreen).
+// Drives the real main window under Xvfb: menus, the 3D view, the demo project loaded and
+// registered on the worker thread, cancel, save.
+#include <QElapsedTimer>
 #include <QMenuBar>
+#include <QMessageBox>
+#include <QSignalSpy>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QVTKOpenGLNativeWidget.h>
 #include <QtTest/QtTest>
 
+#include "core/io/project.h"
+#include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/project_panels.h"
 #include "ui/view_3d.h"
+
+using scanreg::ui::JobRunner;
+using scanreg::ui::MainWindow;
+
+namespace {
+
+// Waits for the running job; returns true when it succeeded.
+bool WaitForJob(MainWindow& window, int timeout_ms, bool* cancelled = nullptr) {
+  QSignalSpy ok(window.jobs(), &JobRunner::Succeeded);
+  QSignalSpy failed(window.jobs(), &JobRunner::Failed);
+  QElapsedTimer timer;
+  timer.start();
+  while (ok.isEmpty() && failed.isEmpty() && timer.elapsed() < timeout_ms) QTest::qWait(50);
+  if (!failed.isEmpty() && cancelled) *cancelled = failed.first().at(2).toBool();
+  return !ok.isEmpty();
+}
+
+}  // namespace
 
 class MainWindowTest : public QObject {
   Q_OBJECT
 
  private slots:
   void HasMenusAndAnEmpty3dView() {
-    scanreg::ui::MainWindow window;
+    MainWindow window;
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     QStringList menus;
     for (QAction* a : window.menuBar()->actions()) menus << a->text().remove('&');
-    QCOMPARE(menus, QStringList({"File", "View", "Help"}));
-    QVERIFY(window.view3d() != nullptr);
+    QCOMPARE(menus, QStringList({"File", "Registration", "View", "Help"}));
     QCOMPARE(window.view3d()->PropCount(), 0);
+    QVERIFY(!window.RegisterProject());  // nothing to register without a project
   }
 
   void ScreenshotShowsTheRenderedView() {
-    scanreg::ui::MainWindow window;
+    MainWindow window;
     window.show();
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     QTest::qWait(200);
@@ -37,6 +62,69 @@ class MainWindowTest : public QObject {
     const QPoint centre = window.view3d()->mapTo(&window, window.view3d()->rect().center());
     const QColor c = image.pixelColor(centre);
     QVERIFY2(c.red() < 120 && c.blue() > c.red(), qPrintable(QString("centre colour %1").arg(c.name())));
+  }
+
+  void BadProjectFileShowsADialogNamingIt() {
+    MainWindow window;
+    window.show();
+    QTemporaryDir dir;
+    const QString path = dir.filePath("broken.scanreg.json");
+    QFile f(path);
+    QVERIFY(f.open(QIODevice::WriteOnly));
+    f.write("{ not json");
+    f.close();
+    QVERIFY(!window.OpenProject(path));
+    auto* box = window.findChild<QMessageBox*>("ErrorDialog");
+    QVERIFY(box != nullptr);
+    QVERIFY2(box->text().contains("broken.scanreg.json"), qPrintable(box->text()));
+  }
+
+  void DemoProjectLoadsRegistersCancelsAndSaves() {
+    MainWindow window;
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTemporaryDir dir;
+    QVERIFY(window.OpenDemoProject(dir.filePath("demo")));
+    QVERIFY(!window.OpenDemoProject(dir.filePath("other")));  // one job at a time
+    QVERIFY(WaitForJob(window, 300000));
+    QCOMPARE(static_cast<int>(window.scans().size()), 5);
+    QCOMPARE(window.scanList()->rowCount(), 5);
+    QVERIFY(window.view3d()->PropCount() > 0);
+
+    // Cancel a registration right away: the project is unchanged.
+    std::vector<Eigen::Matrix4d> before;
+    for (const auto& s : window.project().scans) before.push_back(s.world_from_scan.matrix());
+    QVERIFY(window.RegisterProject());
+    window.jobs()->Cancel();
+    bool cancelled = false;
+    QVERIFY(!WaitForJob(window, 300000, &cancelled));
+    QVERIFY(cancelled);
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      QVERIFY(window.project().scans[i].world_from_scan.matrix() == before[i]);
+      QVERIFY(!window.project().scans[i].registered);
+    }
+
+    // Register for real: the panels fill, most scans are registered, the project is dirty.
+    QVERIFY(window.RegisterProject());
+    QVERIFY(WaitForJob(window, 600000));
+    QCOMPARE(static_cast<int>(window.confusion().rows()), 5);
+    QCOMPARE(window.confusionPanel()->rowCount(), 5);
+    QVERIFY(window.confusion()(0, 0) > 100);  // the diagonal holds the feature counts
+    int registered = 0;
+    for (int r = 0; r < window.scanList()->rowCount(); ++r)
+      registered += window.scanList()->item(r, 3)->text() == "registered";
+    QVERIFY2(registered >= 4, qPrintable(QString("%1 registered").arg(registered)));
+    QVERIFY(window.dirty());
+
+    // Save and re-read: the registration is in the file.
+    const QString path = dir.filePath("saved.scanreg.json");
+    QVERIFY(window.SaveProject(path));
+    QVERIFY(!window.dirty());
+    auto saved = scanreg::io::LoadProject(path.toStdString());
+    QVERIFY(saved.ok());
+    int saved_registered = 0;
+    for (const auto& s : saved->scans) saved_registered += s.registered;
+    QCOMPARE(saved_registered, registered);
   }
 };
 

@@ -1,0 +1,41 @@
+// Dock panels over the project: the scan list, the confusion matrix heat map and the log.
+#pragma once
+
+#include <Eigen/Core>
+#include <QPlainTextEdit>
+#include <QTableWidget>
+#include <vector>
+
+#include "core/geometry/scan.h"
+#include "core/io/project.h"
+
+namespace scanreg::ui {
+
+// One row per scan: name, grid size, valid points, status, position, error against the reference.
+class ScanListPanel : public QTableWidget {
+  Q_OBJECT
+
+ public:
+  explicit ScanListPanel(QWidget* parent = nullptr);
+  void Show(const io::Project& project, const std::vector<Scan>& scans);
+};
+
+// C(i, j) as a heat map with the counts; the diagonal (feature counts) in grey.
+class ConfusionPanel : public QTableWidget {
+  Q_OBJECT
+
+ public:
+  explicit ConfusionPanel(QWidget* parent = nullptr);
+  void Show(const Eigen::MatrixXi& confusion, const std::vector<std::string>& names);
+};
+
+// Core log messages (they arrive on any thread; Append must be called on the GUI thread).
+class LogPanel : public QPlainTextEdit {
+  Q_OBJECT
+
+ public:
+  explicit LogPanel(QWidget* parent = nullptr);
+  void Append(const QString& level, const QString& message);
+};
+
+}  // namespace scanreg::ui
