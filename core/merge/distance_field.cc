@@ -1,0 +1,206 @@
+#include "core/merge/distance_field.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace scanreg::merge {
+
+namespace {
+
+constexpr int kMaxBins = 512;
+
+}  // namespace
+
+bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                               std::vector<int>* scratch, float* distance) {
+  const double sigma = options.sigma_m, band = options.Band();
+  patches.Candidates(x, band + 3.0 * sigma, scratch);
+  if (scratch->empty()) return false;
+  // Step 1: nearest point p' of every candidate patch; d_min.
+  struct Near {
+    float dist;
+    float sigma;  // sigma' = sigma cos(phi)
+    float vote;   // +1 when x is in front of the patch ((p' - x) . n < 0), -1 behind
+  };
+  thread_local std::vector<Near> near;
+  thread_local std::vector<Eigen::Vector3f> closest;
+  near.clear();
+  closest.resize(scratch->size());
+  float d_min = std::numeric_limits<float>::max();
+  for (std::size_t i = 0; i < scratch->size(); ++i) {
+    const Patch& p = patches.patches[(*scratch)[i]];
+    closest[i] = ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]);
+    d_min = std::min(d_min, (closest[i] - x).norm());
+  }
+  if (d_min > band) return false;
+  const float limit = float(d_min + 3.0 * sigma);
+  float nearest_vote = 1.0f;
+  for (std::size_t i = 0; i < scratch->size(); ++i) {
+    const Eigen::Vector3f to_x = x - closest[i];
+    const float d = to_x.norm();
+    if (d > limit) continue;
+    const Patch& p = patches.patches[(*scratch)[i]];
+    // Step 2: phi between the patch's line of sight and the direction to x (the normal when x is on it).
+    const Eigen::Vector3f los = (closest[i] - patches.scanner[p.scan]).normalized();
+    const Eigen::Vector3f dir = d > 1e-7f ? Eigen::Vector3f(to_x / d) : p.normal;
+    const float cos_phi = std::max(std::abs(los.dot(dir)), 0.2f);  // guard phi near 90 degrees
+    const float side = -to_x.dot(p.normal);                       // (p' - x) . n
+    const float vote = side < 0 ? 1.0f : (side > 0 ? -1.0f : 0.0f);
+    if (d == d_min) nearest_vote = vote == 0.0f ? 1.0f : vote;
+    near.push_back({d, float(sigma) * cos_phi, vote});
+  }
+  // Step 3: the histogram over [d_lo, d_min + 3 sigma).
+  double bin = options.Bin();
+  const double d_lo = std::max(0.0, double(d_min) - 3.0 * sigma);
+  int bins = int(std::ceil((limit - d_lo) / bin)) + 1;
+  if (bins > kMaxBins) bins = kMaxBins, bin = (limit - d_lo) / (kMaxBins - 1);
+  thread_local std::vector<double> p_any, log_p1, vote_sum, cdf;
+  p_any.assign(bins, 0.0), log_p1.assign(bins, 0.0), vote_sum.assign(bins, 0.0);
+  cdf.resize(bins + 1);
+  for (const Near& n : near) {
+    // F_p is 0 below dist - 6 sigma' and 1 above dist + 6 sigma': erf only in between.
+    const double inv = 1.0 / (std::sqrt(2.0) * n.sigma);
+    const int k0 = std::clamp(int(std::floor((n.dist - 6.0 * n.sigma - d_lo) / bin)), 0, bins);
+    const int k1 = std::clamp(int(std::ceil((n.dist + 6.0 * n.sigma - d_lo) / bin)), 0, bins);
+    for (int k = 0; k < k0; ++k) cdf[k] = 0.0;
+    for (int k = k0; k <= k1; ++k) cdf[k] = 0.5 * (1.0 + std::erf((d_lo + k * bin - n.dist) * inv));
+    for (int k = k1 + 1; k <= bins; ++k) cdf[k] = 1.0;
+    for (int k = k0; k < bins; ++k) {
+      const double in_bin = cdf[k + 1] - cdf[k];  // P(d_k <= D_p < d_{k+1})
+      p_any[k] += in_bin;
+      vote_sum[k] += in_bin * n.vote;
+      log_p1[k] += cdf[k] >= 1.0 ? -700.0 : std::log1p(-cdf[k]);  // no patch nearer than d_k
+    }
+  }
+  // Step 4: the most likely bin; step 5: parabola through its neighbours.
+  int best = 0;
+  double best_p = -1.0;
+  std::vector<double>& pb = cdf;  // reuse
+  for (int k = 0; k < bins; ++k) {
+    pb[k] = p_any[k] * std::exp(log_p1[k]);
+    if (pb[k] > best_p) best_p = pb[k], best = k;
+  }
+  double offset = 0.0;
+  if (best > 0 && best + 1 < bins) {
+    const double a = pb[best - 1], b = pb[best], c = pb[best + 1];
+    const double den = a - 2.0 * b + c;
+    if (den < 0.0) offset = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+  }
+  const double magnitude = std::max(0.0, d_lo + (best + 0.5 + offset) * bin);
+  // Step 6: sign by the weighted vote W(x, d) of the chosen bin.
+  const double w = vote_sum[best];
+  const float sign = w > 0.0 ? 1.0f : (w < 0.0 ? -1.0f : nearest_vote);
+  *distance = sign * float(magnitude);
+  return true;
+}
+
+float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                   std::vector<int>* scratch, float* distance) {
+  const double band = options.Band();
+  patches.Candidates(x, band, scratch);
+  thread_local std::vector<std::pair<float, int>> nearest;  // per scan: (distance, patch)
+  nearest.assign(patches.scanner.size(), {std::numeric_limits<float>::max(), -1});
+  for (int id : *scratch) {
+    const Patch& p = patches.patches[id];
+    const float d = (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]],
+                                            patches.points[p.v[2]]) - x).norm();
+    if (d <= band && d < nearest[p.scan].first) nearest[p.scan] = {d, id};
+  }
+  double sum = 0.0, weight = 0.0;
+  for (std::size_t s = 0; s < nearest.size(); ++s) {
+    if (nearest[s].second < 0) continue;
+    const Patch& p = patches.patches[nearest[s].second];
+    const Eigen::Vector3f& eye = patches.scanner[s];
+    const Eigen::Vector3f ray = x - eye;
+    const float range = ray.norm();
+    if (!(range > 0.0f)) continue;
+    const Eigen::Vector3f u = ray / range;
+    const float un = u.dot(p.normal);  // < 0: the normal faces the scanner
+    if (std::abs(un) < 0.05f) continue;
+    // Range of the patch's plane along the scanner's line of sight through x.
+    const float t = (patches.points[p.v[0]] - eye).dot(p.normal) / un;
+    const float sdf = t - range;  // > 0: x lies in front of the surface (outside)
+    if (std::abs(sdf) > band) continue;
+    const double w = std::abs(un);
+    sum += w * sdf;
+    weight += w;
+  }
+  if (weight <= 0.0) {
+    // Every scan sees the nearest patch too obliquely: the distance along the normal of the
+    // nearest patch, with a token weight, so that the surface has no hole there.
+    float best = std::numeric_limits<float>::max();
+    for (const auto& [d, id] : nearest) {
+      if (id < 0 || d >= best) continue;
+      const Patch& p = patches.patches[id];
+      best = d;
+      *distance = (x - patches.points[p.v[0]]).dot(p.normal);
+    }
+    return best <= band ? 1e-3f : 0.0f;
+  }
+  *distance = float(sum / weight);
+  return float(weight);
+}
+
+Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
+                                  const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  const double band = options.Band();
+  const bool ml = options.method == MergeMethod::kMaximumLikelihood;
+  patches.BuildHash(ml ? band + 3.0 * options.sigma_m : band);
+  SparseGrid grid(patches.origin, options.voxel_m);
+  progress.Report(0.0, "allocating blocks");
+  for (std::size_t i = 0; i < patches.points.size(); ++i) {
+    if ((i & 0xFFFFF) == 0 && cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+    grid.AllocateAround(patches.points[i], band);
+  }
+  const long n = long(grid.num_blocks());
+  std::atomic<long> done{0};
+  std::atomic<bool> cancelled{false};
+  const char* stage = ml ? "maximum-likelihood distance" : "TSDF";
+  constexpr int B = SparseGrid::kBlock;
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long bi = 0; bi < n; ++bi) {
+    if (cancelled.load(std::memory_order_relaxed)) continue;
+    if (cancel.IsCancelled()) {
+      cancelled = true;
+      continue;
+    }
+    SparseGrid::Block& b = grid.block(bi);
+    std::vector<int> scratch;
+    for (int z = 0; z < B; ++z) {
+      for (int y = 0; y < B; ++y) {
+        for (int x = 0; x < B; ++x) {
+          const int l = SparseGrid::Local(x, y, z);
+          const Eigen::Vector3f p = grid.Position(b.key, x, y, z);
+          float d = 0.0f;
+          if (ml) {
+            if (MaximumLikelihoodDistance(patches, p, options, &scratch, &d)) b.distance[l] = d, b.weight[l] = 1.0f;
+          } else {
+            const float w = TsdfDistance(patches, p, options, &scratch, &d);
+            if (w > 0.0f) b.distance[l] = d, b.weight[l] = w;
+          }
+        }
+      }
+    }
+    const long k = ++done;
+    if (k * 200 / n != (k - 1) * 200 / n) progress.Report(double(k) / n, stage);
+  }
+  if (cancelled || cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+  if (options.smooth_iterations > 0) {
+    progress.Report(1.0, "smoothing the field");
+    SmoothField(grid, options.smooth_iterations);
+  }
+  return grid;
+}
+
+Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
+                                  const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel);
+  if (!patches) return patches.error();
+  return ComputeField(*patches, options, progress, cancel);
+}
+
+}  // namespace scanreg::merge

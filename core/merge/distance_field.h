@@ -1,0 +1,36 @@
+// The signed distance field of registered scans on a sparse grid (SPEC §4), positive outside
+// (towards the scanners), negative inside: S's maximum-likelihood distance or Curless–Levoy TSDF.
+#pragma once
+
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/merge/merge_options.h"
+#include "core/merge/range_patches.h"
+#include "core/merge/sparse_grid.h"
+
+namespace scanreg::merge {
+
+// Allocates the blocks within options.Band() of the input points and evaluates every grid point
+// there, in parallel over blocks; grid points farther than the band from every patch stay unknown.
+// Progress: at most ~200 reports; cancel is checked once per block.
+Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
+                                  const CancelToken& cancel);
+
+// The same from prepared patches (RangePatches::BuildHash is called here).
+Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
+                                  const CancelToken& cancel);
+
+// S §3.3 for one grid point x (relative to the patches' origin): the maximum-likelihood distance
+// with its sign. False when no patch lies within `band` of x. `scratch` avoids reallocations.
+bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                               std::vector<int>* scratch, float* distance);
+
+// Curless–Levoy: weighted average over scans of the distance along each scanner's line of sight
+// from x to the plane of that scan's nearest patch, truncated to the band. Returns the total weight.
+float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                   std::vector<int>* scratch, float* distance);
+
+}  // namespace scanreg::merge

@@ -1,0 +1,31 @@
+// Registered scans to one surface (SPEC §4): range-image patches, the signed distance field
+// (maximum likelihood or TSDF), optional smoothing, Marching Cubes, small-piece removal.
+#pragma once
+
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/merge/merge_options.h"
+#include "core/merge/mesh.h"
+
+namespace scanreg::merge {
+
+struct MergeResult {
+  Mesh mesh;
+  std::size_t scans = 0;             // scans merged
+  std::size_t input_points = 0;      // their valid points
+  std::size_t patches = 0;           // range-image triangles used
+  std::size_t blocks = 0;            // allocated 8^3 blocks
+  std::size_t known_voxels = 0;      // grid points with a field value
+  std::size_t field_bytes = 0;       // memory of the sparse grid
+  std::size_t removed_triangles = 0;  // in small pieces
+  double seconds = 0.0;
+};
+
+// All scans must be registered (world_from_scan set). Cancelled: kCancelled, no result.
+Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
+                                   const CancelToken& cancel);
+
+}  // namespace scanreg::merge

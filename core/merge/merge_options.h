@@ -1,0 +1,31 @@
+// Options of the merge (SPEC §4): which signed distance field, its grid, and the mesh clean-up.
+#pragma once
+
+#include "core/common/expected.h"
+
+namespace scanreg::merge {
+
+enum class MergeMethod {
+  kMaximumLikelihood,  // S §2.3 / §3.3: maximum-likelihood distance histogram, sign by weighted vote
+  kTsdf,               // Curless & Levoy 1996: weighted truncated signed distance averaging (baseline)
+};
+
+const char* MergeMethodName(MergeMethod method);
+
+struct MergeOptions {
+  double voxel_m = 0.02;           // metres: edge of a voxel (S's grid interval, §4.1: 0.02)
+  MergeMethod method = MergeMethod::kMaximumLikelihood;
+  double sigma_m = 0.012;          // metres: range noise along the line of sight (S §3.1; W's scanner 12 mm)
+  double band_m = 0.0;             // metres: field evaluated within this distance of the data; 0 = 3 voxels
+  double bin_m = 0.0;              // metres: ML histogram bin width (S §3.3, a user setting); 0 = sigma / 4
+  int smooth_iterations = 0;       // passes of a 3x3x3 mean filter over the field (S §3.3, optional)
+  bool remove_small_pieces = true;  // drop connected pieces of the mesh with few triangles
+  double min_piece_fraction = 0.05;  // a piece is small below this fraction of the largest piece's triangles
+  double max_grazing_deg = 85.0;   // degrees: range-image triangles seen more obliquely are not patches
+  Status Validate() const;
+
+  double Band() const { return band_m > 0.0 ? band_m : 3.0 * voxel_m; }
+  double Bin() const { return bin_m > 0.0 ? bin_m : sigma_m / 4.0; }
+};
+
+}  // namespace scanreg::merge

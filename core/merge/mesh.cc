@@ -1,0 +1,84 @@
+#include "core/merge/mesh.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <unordered_map>
+
+namespace scanreg::merge {
+
+namespace {
+
+std::vector<int> Pieces(const Mesh& mesh) {  // union-find over vertices; returns root per triangle
+  std::vector<int> parent(mesh.vertices.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (const auto& t : mesh.triangles) {
+    const int a = find(t[0]), b = find(t[1]), c = find(t[2]);
+    parent[b] = a;
+    parent[find(c)] = a;
+  }
+  std::vector<int> root(mesh.triangles.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) root[i] = find(mesh.triangles[i][0]);
+  return root;
+}
+
+}  // namespace
+
+EdgeCounts CountEdges(const Mesh& mesh) {
+  std::unordered_map<std::uint64_t, int> uses;
+  uses.reserve(mesh.triangles.size() * 2);
+  for (const auto& t : mesh.triangles) {
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t a = t[e], b = t[(e + 1) % 3];
+      ++uses[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)];
+    }
+  }
+  EdgeCounts c;
+  for (const auto& [key, n] : uses) (n == 1 ? c.boundary : n == 2 ? c.manifold : c.non_manifold)++;
+  return c;
+}
+
+bool IsWatertight(const Mesh& mesh) {
+  const EdgeCounts c = CountEdges(mesh);
+  return !mesh.triangles.empty() && c.boundary == 0 && c.non_manifold == 0;
+}
+
+std::vector<std::size_t> PieceSizes(const Mesh& mesh) {
+  std::unordered_map<int, std::size_t> count;
+  for (int r : Pieces(mesh)) ++count[r];
+  std::vector<std::size_t> sizes;
+  for (const auto& [r, n] : count) sizes.push_back(n);
+  std::sort(sizes.rbegin(), sizes.rend());
+  return sizes;
+}
+
+std::size_t RemoveSmallPieces(Mesh& mesh, double min_fraction) {
+  const std::vector<int> root = Pieces(mesh);
+  std::unordered_map<int, std::size_t> count;
+  for (int r : root) ++count[r];
+  std::size_t largest = 0;
+  for (const auto& [r, n] : count) largest = std::max(largest, n);
+  const double keep_from = min_fraction * double(largest);
+  std::vector<int> remap(mesh.vertices.size(), -1);
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<Eigen::Vector3i> triangles;
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    if (double(count[root[i]]) < keep_from) continue;
+    Eigen::Vector3i t = mesh.triangles[i];
+    for (int k = 0; k < 3; ++k) {
+      if (remap[t[k]] < 0) remap[t[k]] = int(vertices.size()), vertices.push_back(mesh.vertices[t[k]]);
+      t[k] = remap[t[k]];
+    }
+    triangles.push_back(t);
+  }
+  const std::size_t removed = mesh.triangles.size() - triangles.size();
+  mesh.vertices = std::move(vertices);
+  mesh.triangles = std::move(triangles);
+  return removed;
+}
+
+}  // namespace scanreg::merge

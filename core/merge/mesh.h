@@ -1,0 +1,32 @@
+// A triangle mesh with float vertices relative to a double origin (UTM coordinates keep their
+// precision), and its topology checks and clean-up.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <vector>
+
+namespace scanreg::merge {
+
+struct Mesh {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // world position of vertex (0, 0, 0)
+  std::vector<Eigen::Vector3f> vertices;             // metres, world minus origin
+  std::vector<Eigen::Vector3i> triangles;            // counter-clockwise seen from outside
+};
+
+struct EdgeCounts {
+  std::size_t boundary = 0;     // edges of exactly one triangle
+  std::size_t manifold = 0;     // edges of exactly two triangles
+  std::size_t non_manifold = 0;  // edges of three or more
+};
+EdgeCounts CountEdges(const Mesh& mesh);
+// Every edge shared by exactly two triangles (and at least one triangle).
+bool IsWatertight(const Mesh& mesh);
+
+// Triangle counts of the connected pieces (triangles sharing a vertex), largest first.
+std::vector<std::size_t> PieceSizes(const Mesh& mesh);
+// Removes pieces with fewer triangles than min_fraction x the largest piece's, and unused
+// vertices. Returns the number of triangles removed.
+std::size_t RemoveSmallPieces(Mesh& mesh, double min_fraction);
+
+}  // namespace scanreg::merge

@@ -1,0 +1,163 @@
+#include "core/merge/range_patches.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace scanreg::merge {
+
+namespace {
+
+// Median distance between horizontally adjacent valid cells (a sample of them).
+double MedianSpacing(const Scan& scan) {
+  std::vector<float> d;
+  const int step = std::max(1, int(scan.size() / 20000));
+  for (std::size_t i = 0; i + 1 < scan.size(); i += step) {
+    if ((i + 1) % scan.cols == 0 || !scan.valid[i] || !scan.valid[i + 1]) continue;
+    d.push_back((scan.points[i + 1] - scan.points[i]).norm());
+  }
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace
+
+Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+                                       const Eigen::Vector3f& c) {
+  const Eigen::Vector3f ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3f bp = p - b;
+  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3f cp = p - c;
+  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const float denom = 1.0f / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+Expected<RangePatches> BuildRangePatches(const std::vector<Scan>& scans, double max_grazing_deg,
+                                         const CancelToken& cancel) {
+  RangePatches out;
+  // Origin: the first scanner position, rounded to a metre (keeps UTM offsets out of the floats).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::size_t total = 0;
+  for (const Scan& s : scans) total += s.CountValid();
+  if (total == 0) {
+    std::string names;
+    for (const Scan& s : scans) names += (names.empty() ? "" : ", ") + s.name;
+    return MakeError(ErrorCode::kInvalidArgument,
+                     scans.empty() ? "merge: no scan to merge (mark scans registered first)"
+                                   : "merge: the scans to merge (" + names + ") have no valid point");
+  }
+  for (const Scan& s : scans) {
+    if (s.CountValid()) {
+      origin = s.world_from_scan.translation().array().round();
+      break;
+    }
+  }
+  out.origin = origin;
+  out.points.reserve(total);
+  const float cos_grazing = float(std::cos(max_grazing_deg * M_PI / 180.0));
+  for (std::size_t si = 0; si < scans.size(); ++si) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled while meshing the scans");
+    const Scan& s = scans[si];
+    Eigen::Isometry3d shifted = s.world_from_scan;
+    shifted.translation() -= origin;
+    const Eigen::Isometry3f t = shifted.cast<float>();
+    const Eigen::Vector3f eye = t.translation();
+    out.scanner.push_back(eye);
+    const double spacing = MedianSpacing(s);
+    const float max_edge2 = float(std::pow(8.0 * spacing, 2));
+    std::vector<int> id(s.size(), -1);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (!s.valid[i]) continue;
+      id[i] = int(out.points.size());
+      out.points.push_back(t * s.points[i]);
+    }
+    auto add = [&](int a, int b, int c) {
+      if (a < 0 || b < 0 || c < 0) return;
+      const Eigen::Vector3f &pa = out.points[a], &pb = out.points[b], &pc = out.points[c];
+      if ((pb - pa).squaredNorm() > max_edge2 || (pc - pb).squaredNorm() > max_edge2 ||
+          (pa - pc).squaredNorm() > max_edge2) {
+        return;
+      }
+      Eigen::Vector3f n = (pb - pa).cross(pc - pa);
+      const float len = n.norm();
+      if (!(len > 0.0f)) return;
+      n /= len;
+      const Eigen::Vector3f centroid = (pa + pb + pc) / 3.0f;
+      const Eigen::Vector3f to_eye = (eye - centroid).normalized();
+      float c_los = n.dot(to_eye);
+      if (c_los < 0) n = -n, c_los = -c_los;
+      if (c_los < cos_grazing) return;
+      out.patches.push_back({{a, b, c}, n, int(si)});
+      const float r = std::max({(pa - centroid).norm(), (pb - centroid).norm(), (pc - centroid).norm()});
+      out.max_patch_radius = std::max(out.max_patch_radius, double(r));
+    };
+    for (int r = 0; r + 1 < s.rows; ++r) {
+      for (int c = 0; c + 1 < s.cols; ++c) {
+        const int p00 = id[s.Index(r, c)], p01 = id[s.Index(r, c + 1)];
+        const int p10 = id[s.Index(r + 1, c)], p11 = id[s.Index(r + 1, c + 1)];
+        if (p00 >= 0 && p01 >= 0 && p10 >= 0 && p11 >= 0) {
+          // Split along the shorter diagonal.
+          if ((out.points[p00] - out.points[p11]).squaredNorm() <= (out.points[p01] - out.points[p10]).squaredNorm()) {
+            add(p00, p01, p11), add(p00, p11, p10);
+          } else {
+            add(p00, p01, p10), add(p01, p11, p10);
+          }
+        } else {
+          add(p00, p01, p10), add(p01, p11, p10), add(p00, p01, p11), add(p00, p11, p10);
+        }
+      }
+    }
+  }
+  if (out.patches.empty()) {
+    return MakeError(ErrorCode::kFailed, "merge: the scans' valid points form no surface (no adjacent valid cells)");
+  }
+  return out;
+}
+
+void RangePatches::BuildHash(double cell_m) {
+  cell = std::max(cell_m, 1e-6);
+  hash.clear();
+  centroid.resize(patches.size());
+  const double inv = 1.0 / cell;
+  for (std::size_t i = 0; i < patches.size(); ++i) {
+    const Patch& p = patches[i];
+    centroid[i] = (points[p.v[0]] + points[p.v[1]] + points[p.v[2]]) / 3.0f;
+    const BlockKey k{int(std::floor(centroid[i].x() * inv)), int(std::floor(centroid[i].y() * inv)),
+                     int(std::floor(centroid[i].z() * inv))};
+    hash[k].push_back(int(i));
+  }
+}
+
+void RangePatches::Candidates(const Eigen::Vector3f& x, double radius, std::vector<int>* out) const {
+  out->clear();
+  const double r = radius + max_patch_radius;
+  const float r2 = float(r * r);
+  const double inv = 1.0 / cell;
+  const int x0 = int(std::floor((x.x() - r) * inv)), x1 = int(std::floor((x.x() + r) * inv));
+  const int y0 = int(std::floor((x.y() - r) * inv)), y1 = int(std::floor((x.y() + r) * inv));
+  const int z0 = int(std::floor((x.z() - r) * inv)), z1 = int(std::floor((x.z() + r) * inv));
+  for (int k = z0; k <= z1; ++k) {
+    for (int j = y0; j <= y1; ++j) {
+      for (int i = x0; i <= x1; ++i) {
+        const auto it = hash.find(BlockKey{i, j, k});
+        if (it == hash.end()) continue;
+        for (int p : it->second) {
+          if ((centroid[p] - x).squaredNorm() <= r2) out->push_back(p);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace scanreg::merge

@@ -1,0 +1,51 @@
+// The range images as meshes (S §2.1): each organized scan's adjacent valid cells form triangles
+// ("patches") in world coordinates relative to a common origin, with a spatial hash for radius
+// queries (the role of S's k-d tree; a uniform hash answers fixed-radius queries more cheaply).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/merge/sparse_grid.h"
+
+namespace scanreg::merge {
+
+struct Patch {
+  std::array<int, 3> v;     // indices into RangePatches::points
+  Eigen::Vector3f normal;   // unit, facing the scanner that saw it
+  int scan = 0;             // index into the input scans
+};
+
+struct RangePatches {
+  Eigen::Vector3d origin;                   // world position of (0, 0, 0)
+  std::vector<Eigen::Vector3f> points;      // world minus origin
+  std::vector<Patch> patches;
+  std::vector<Eigen::Vector3f> scanner;     // per scan: scanner position, world minus origin
+  double max_patch_radius = 0.0;            // metres: largest centroid-to-vertex distance
+
+  // Indices of patches whose centroid lies within radius + max_patch_radius of x (a superset of the
+  // patches within radius of x). Thread-safe.
+  void Candidates(const Eigen::Vector3f& x, double radius, std::vector<int>* out) const;
+  void BuildHash(double cell_m);
+
+  std::unordered_map<BlockKey, std::vector<int>, BlockKeyHash> hash;
+  double cell = 1.0;
+  std::vector<Eigen::Vector3f> centroid;
+};
+
+// Triangulates the valid cells of every scan at its world_from_scan. Skips triangles with an edge
+// over 8x the scan's median grid spacing (depth edges) or seen more obliquely than max_grazing_deg.
+// Errors name the scan when no scan has a valid point.
+Expected<RangePatches> BuildRangePatches(const std::vector<Scan>& scans, double max_grazing_deg,
+                                         const CancelToken& cancel);
+
+// Nearest point to x on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
+Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& x, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+                                       const Eigen::Vector3f& c);
+
+}  // namespace scanreg::merge

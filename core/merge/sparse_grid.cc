@@ -1,0 +1,80 @@
+#include "core/merge/sparse_grid.h"
+
+#include <cmath>
+
+namespace scanreg::merge {
+
+void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m) {
+  const double inv = 1.0 / voxel_;
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = FloorDiv(int(std::ceil((p[a] - band_m) * inv)), kBlock);
+    hi[a] = FloorDiv(int(std::floor((p[a] + band_m) * inv)), kBlock);
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z) {
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        const BlockKey key{x, y, z};
+        if (index_.count(key)) continue;
+        index_.emplace(key, blocks_.size());
+        Block& b = blocks_.emplace_back();
+        b.key = key;
+        b.distance.fill(0.0f);
+        b.weight.fill(0.0f);
+      }
+    }
+  }
+}
+
+std::size_t SparseGrid::MemoryBytes() const {
+  return blocks_.capacity() * sizeof(Block) + index_.size() * (sizeof(BlockKey) + sizeof(std::size_t) + 16);
+}
+
+const SparseGrid::Block* SparseGrid::Find(const BlockKey& key) const {
+  const auto it = index_.find(key);
+  return it == index_.end() ? nullptr : &blocks_[it->second];
+}
+
+bool SparseGrid::Sample(int i, int j, int k, float* distance) const {
+  const BlockKey key{FloorDiv(i, kBlock), FloorDiv(j, kBlock), FloorDiv(k, kBlock)};
+  const Block* b = Find(key);
+  if (!b) return false;
+  const int l = Local(i - key.x * kBlock, j - key.y * kBlock, k - key.z * kBlock);
+  if (b->weight[l] <= 0.0f) return false;
+  *distance = b->distance[l];
+  return true;
+}
+
+void SmoothField(SparseGrid& grid, int iterations) {
+  constexpr int B = SparseGrid::kBlock;
+  for (int it = 0; it < iterations; ++it) {
+    std::vector<std::array<float, SparseGrid::kVoxels>> out(grid.num_blocks());
+#pragma omp parallel for schedule(dynamic, 16)
+    for (long bi = 0; bi < long(grid.num_blocks()); ++bi) {
+      const SparseGrid::Block& b = grid.block(bi);
+      out[bi] = b.distance;
+      for (int z = 0; z < B; ++z) {
+        for (int y = 0; y < B; ++y) {
+          for (int x = 0; x < B; ++x) {
+            if (b.weight[SparseGrid::Local(x, y, z)] <= 0.0f) continue;
+            const int i = b.key.x * B + x, j = b.key.y * B + y, k = b.key.z * B + z;
+            double sum = 0.0;
+            int n = 0;
+            for (int dz = -1; dz <= 1; ++dz) {
+              for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                  float d;
+                  if (grid.Sample(i + dx, j + dy, k + dz, &d)) sum += d, ++n;
+                }
+              }
+            }
+            out[bi][SparseGrid::Local(x, y, z)] = float(sum / n);
+          }
+        }
+      }
+    }
+    for (std::size_t bi = 0; bi < grid.num_blocks(); ++bi) grid.block(bi).distance = out[bi];
+  }
+}
+
+}  // namespace scanreg::merge

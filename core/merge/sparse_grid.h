@@ -1,0 +1,69 @@
+// A signed distance field on a sparse grid of hashed voxel blocks (8^3 voxels each): memory grows
+// with the surface, not with the bounding box. Grid point (i, j, k) sits at origin + voxel * (i, j, k).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace scanreg::merge {
+
+struct BlockKey {
+  int x = 0, y = 0, z = 0;
+  bool operator==(const BlockKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+struct BlockKeyHash {
+  std::size_t operator()(const BlockKey& k) const {
+    return (std::size_t(std::uint32_t(k.x)) * 73856093u) ^ (std::size_t(std::uint32_t(k.y)) * 19349663u) ^
+           (std::size_t(std::uint32_t(k.z)) * 83492791u);
+  }
+};
+
+class SparseGrid {
+ public:
+  static constexpr int kBlock = 8;  // voxels per block edge
+  static constexpr int kVoxels = kBlock * kBlock * kBlock;
+  struct Block {
+    BlockKey key;
+    std::array<float, kVoxels> distance;  // metres, positive outside; meaningful where weight > 0
+    std::array<float, kVoxels> weight;    // 0 = unknown
+  };
+
+  SparseGrid(const Eigen::Vector3d& origin, double voxel_m) : origin_(origin), voxel_(voxel_m) {}
+
+  const Eigen::Vector3d& origin() const { return origin_; }
+  double voxel() const { return voxel_; }
+
+  // Allocates (unknown) every block holding a grid point within band_m of p (p relative to origin).
+  void AllocateAround(const Eigen::Vector3f& p, double band_m);
+  std::size_t num_blocks() const { return blocks_.size(); }
+  Block& block(std::size_t i) { return blocks_[i]; }
+  const Block& block(std::size_t i) const { return blocks_[i]; }
+  std::size_t MemoryBytes() const;
+
+  // Grid point position relative to the origin.
+  Eigen::Vector3f Position(const BlockKey& key, int vx, int vy, int vz) const {
+    return Eigen::Vector3f(float(voxel_ * (key.x * kBlock + vx)), float(voxel_ * (key.y * kBlock + vy)),
+                           float(voxel_ * (key.z * kBlock + vz)));
+  }
+  static int Local(int vx, int vy, int vz) { return (vz * kBlock + vy) * kBlock + vx; }
+  // Distance and weight at a global grid point; false when unallocated or unknown.
+  bool Sample(int i, int j, int k, float* distance) const;
+  const Block* Find(const BlockKey& key) const;
+
+ private:
+  Eigen::Vector3d origin_;
+  double voxel_;
+  std::vector<Block> blocks_;
+  std::unordered_map<BlockKey, std::size_t, BlockKeyHash> index_;
+};
+
+inline int FloorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Mean filter over the known 3x3x3 neighbours of each known grid point, `iterations` times.
+void SmoothField(SparseGrid& grid, int iterations);
+
+}  // namespace scanreg::merge

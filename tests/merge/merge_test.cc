@@ -1,0 +1,228 @@
+#include "core/merge/merge.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/merge/distance_field.h"
+#include "core/simulate/scanner.h"
+#include "core/simulate/scene.h"
+#include "tests/merge/merge_test_util.h"
+
+namespace scanreg::merge {
+namespace {
+
+using test::AllAroundEyes;
+using test::MakeWindowScan;
+using test::SphereCaster;
+
+double Rms(const Mesh& mesh, const std::function<double(const Eigen::Vector3d&)>& distance) {
+  double sum = 0.0;
+  for (const auto& v : mesh.vertices) sum += std::pow(distance(mesh.origin + v.cast<double>()), 2);
+  return std::sqrt(sum / std::max<std::size_t>(mesh.vertices.size(), 1));
+}
+
+std::vector<Scan> SphereScans(const Eigen::Vector3d& c, double r, double sigma) {
+  std::vector<Scan> scans;
+  int i = 0;
+  for (const auto& eye : AllAroundEyes(c, 3.0)) {
+    scans.push_back(MakeWindowScan(SphereCaster(c, r), eye, c, 100, 100, 0.2, sigma, 7 + i, "v" + std::to_string(i)));
+    ++i;
+  }
+  return scans;
+}
+
+class SphereMerge : public ::testing::TestWithParam<MergeMethod> {};
+
+TEST_P(SphereMerge, WatertightAndBelowInputNoise) {
+  const Eigen::Vector3d c(10.3, -4.2, 1.7);
+  const double r = 0.5, sigma = 0.01;
+  const auto scans = SphereScans(c, r, sigma);
+  MergeOptions options;
+  options.voxel_m = 0.02;
+  options.sigma_m = sigma;
+  options.method = GetParam();
+  NullProgress progress;
+  CancelToken cancel;
+  auto result = MergeScanSet(scans, options, progress, cancel);
+  ASSERT_TRUE(result) << result.error().ToString();
+  const Mesh& mesh = result->mesh;
+  const EdgeCounts edges = CountEdges(mesh);
+  EXPECT_EQ(edges.boundary, 0u);
+  EXPECT_EQ(edges.non_manifold, 0u);
+  EXPECT_TRUE(IsWatertight(mesh));
+  EXPECT_EQ(PieceSizes(mesh).size(), 1u);
+  const double rms = Rms(mesh, [&](const Eigen::Vector3d& p) { return (p - c).norm() - r; });
+  std::printf("%s sphere: %zu triangles, RMS %.4f m (input sigma %.3f)\n", MergeMethodName(GetParam()),
+              mesh.triangles.size(), rms, sigma);
+  // S §4.1.2 keeps 66 % of the input noise with ML; averaging does better on smooth shapes.
+  EXPECT_LT(rms, (GetParam() == MergeMethod::kTsdf ? 0.5 : 0.75) * sigma);
+  // Triangles wound counter-clockwise from outside: normals point away from the centre.
+  int outward = 0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &cc = mesh.vertices[t[2]];
+    const Eigen::Vector3d n = (b - a).cross(cc - a).cast<double>();
+    outward += n.dot(mesh.origin + a.cast<double>() - c) > 0;
+  }
+  EXPECT_GT(outward, 0.99 * mesh.triangles.size());
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, SphereMerge, ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf));
+
+TEST(MergeField, SignsInsideAndOutsideSphere) {
+  const Eigen::Vector3d c(0.0, 0.0, 0.0);
+  const double r = 0.5, sigma = 0.01;
+  const auto scans = SphereScans(c, r, sigma);
+  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
+    MergeOptions options;
+    options.voxel_m = 0.02;
+    options.sigma_m = sigma;
+    options.band_m = 0.1;
+    options.method = method;
+    NullProgress progress;
+    CancelToken cancel;
+    auto grid = ComputeField(scans, options, progress, cancel);
+    ASSERT_TRUE(grid) << grid.error().ToString();
+    int checked = 0, right = 0;
+    double abs_error = 0.0;
+    for (std::size_t b = 0; b < grid->num_blocks(); ++b) {
+      const auto& block = grid->block(b);
+      for (int z = 0; z < 8; ++z) {
+        for (int y = 0; y < 8; ++y) {
+          for (int x = 0; x < 8; ++x) {
+            const int l = SparseGrid::Local(x, y, z);
+            if (block.weight[l] <= 0) continue;
+            const Eigen::Vector3d p = grid->origin() + grid->Position(block.key, x, y, z).cast<double>();
+            const double truth = (p - c).norm() - r;  // negative inside
+            if (std::abs(truth) < 0.03 || std::abs(truth) > 0.07) continue;
+            ++checked;
+            right += (block.distance[l] > 0) == (truth > 0);
+            abs_error += std::abs(block.distance[l] - truth);
+          }
+        }
+      }
+    }
+    ASSERT_GT(checked, 1000) << MergeMethodName(method);
+    EXPECT_GT(right, 0.99 * checked) << MergeMethodName(method);
+    EXPECT_LT(abs_error / checked, 0.5 * 0.05) << MergeMethodName(method);  // magnitudes, not just signs
+  }
+}
+
+TEST(MergeScans, BoxFromSimulatorIsWatertight) {
+  Scene scene;
+  const int tex = scene.AddTexture(SurfaceTexture::Uniform(0.5f));
+  const Eigen::Vector3d center(0.0, 0.0, 0.0), half(0.6, 0.4, 0.5);  // bottom at z = -0.5
+  scene.AddBox(center + Eigen::Vector3d(0, 0, half.z()), half, 0.3, tex);
+  scene.Build();
+  ScannerOptions so;
+  so.cols = 600;
+  so.rows = 200;
+  so.elevation_min_deg = -70;
+  so.elevation_max_deg = 70;
+  so.min_range_m = 0.2;
+  so.range_noise_m = 0.005;
+  so.mixed_pixels = false;
+  std::vector<Scan> scans;
+  NullProgress progress;
+  CancelToken cancel;
+  int i = 0;
+  for (double z : {-1.8, 2.3}) {
+    for (int k = 0; k < 4; ++k) {
+      const double a = M_PI / 4 + k * M_PI / 2;
+      const Eigen::Isometry3d pose(Eigen::Translation3d(2.5 * std::cos(a), 2.5 * std::sin(a), z + half.z()));
+      so.seed = 100 + i;
+      auto scan = SimulateScan(scene, pose, so, "b" + std::to_string(i++), progress, cancel);
+      ASSERT_TRUE(scan);
+      scan->world_from_scan = *scan->reference_world_from_scan;
+      scans.push_back(std::move(*scan));
+    }
+  }
+  MergeOptions options;
+  options.voxel_m = 0.03;
+  options.sigma_m = so.range_noise_m;
+  auto result = MergeScanSet(scans, options, progress, cancel);
+  ASSERT_TRUE(result) << result.error().ToString();
+  EXPECT_TRUE(IsWatertight(result->mesh)) << CountEdges(result->mesh).boundary << " boundary edges";
+  // Distance to the box surface (box frame: yaw 0.3 about z).
+  const Eigen::Matrix3d box_from_world = Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const double rms = Rms(result->mesh, [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = (box_from_world * (p - center - Eigen::Vector3d(0, 0, half.z()))).cwiseAbs() - half;
+    return q.maxCoeff() > 0 ? q.cwiseMax(0.0).norm() : q.maxCoeff();
+  });
+  std::printf("box: %zu triangles, RMS %.4f m (sigma %.3f, voxel %.2f)\n", result->mesh.triangles.size(), rms,
+              so.range_noise_m, options.voxel_m);
+  EXPECT_LT(rms, 0.5 * options.voxel_m);  // sharp edges cut by the cubes dominate, not the noise
+}
+
+TEST(MergeScans, PlaneFromSeveralViewsBelowNoise) {
+  // The wall x = 2 seen from 5 positions; RMS of the vertices away from the wall's border.
+  auto wall = [](const Eigen::Vector3d& o, const Eigen::Vector3d& d) -> std::optional<double> {
+    if (std::abs(d.x()) < 1e-9) return std::nullopt;
+    const double t = (2.0 - o.x()) / d.x();
+    const Eigen::Vector3d p = o + t * d;
+    if (t <= 0 || std::abs(p.y()) > 1.0 || std::abs(p.z()) > 1.0) return std::nullopt;
+    return t;
+  };
+  const double sigma = 0.02;
+  std::vector<Scan> scans;
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Vector3d eye(0.0, -1.0 + 0.5 * i, 0.3 * (i % 2));
+    scans.push_back(MakeWindowScan(wall, eye, Eigen::Vector3d(2, 0, 0), 80, 80, 0.6, sigma, 40 + i, "w"));
+  }
+  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
+    MergeOptions options;
+    options.voxel_m = 0.02;
+    options.sigma_m = sigma;
+    options.method = method;
+    NullProgress progress;
+    CancelToken cancel;
+    auto result = MergeScanSet(scans, options, progress, cancel);
+    ASSERT_TRUE(result) << result.error().ToString();
+    double sum = 0.0;
+    int n = 0;
+    for (const auto& v : result->mesh.vertices) {
+      const Eigen::Vector3d p = result->mesh.origin + v.cast<double>();
+      if (std::abs(p.y()) > 0.8 || std::abs(p.z()) > 0.8) continue;
+      sum += std::pow(p.x() - 2.0, 2), ++n;
+    }
+    ASSERT_GT(n, 1000);
+    const double rms = std::sqrt(sum / n);
+    std::printf("%s plane: RMS %.4f m (input sigma %.3f, 5 views)\n", MergeMethodName(method), rms, sigma);
+    EXPECT_LT(rms, (method == MergeMethod::kTsdf ? 0.5 : 0.75) * sigma) << MergeMethodName(method);
+  }
+}
+
+TEST(MergeScans, BadOptionsAndEmptyInputAreClearErrors) {
+  NullProgress progress;
+  CancelToken cancel;
+  MergeOptions options;
+  options.voxel_m = 0.0;
+  const auto scans = SphereScans(Eigen::Vector3d::Zero(), 0.5, 0.01);
+  auto r = MergeScanSet(scans, options, progress, cancel);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(r.error().message.find("voxel"), std::string::npos);
+  options.voxel_m = -1;
+  EXPECT_FALSE(MergeScanSet(scans, options, progress, cancel));
+  options.voxel_m = 0.02;
+  auto none = MergeScanSet({}, options, progress, cancel);
+  ASSERT_FALSE(none);
+  EXPECT_NE(none.error().message.find("no scan"), std::string::npos);
+  Scan empty("empty_scan", 4, 4);
+  auto no_points = MergeScanSet({empty}, options, progress, cancel);
+  ASSERT_FALSE(no_points);
+  EXPECT_NE(no_points.error().message.find("empty_scan"), std::string::npos);
+}
+
+TEST(MergeScans, CancelReturnsCancelled) {
+  NullProgress progress;
+  CancelToken cancel;
+  cancel.Cancel();
+  MergeOptions options;
+  auto r = MergeScanSet(SphereScans(Eigen::Vector3d::Zero(), 0.5, 0.01), options, progress, cancel);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().code, ErrorCode::kCancelled);
+}
+
+}  // namespace
+}  // namespace scanreg::merge
