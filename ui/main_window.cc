@@ -13,6 +13,7 @@
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
+#include <QUndoStack>
 #include <QVTKOpenGLNativeWidget.h>
 
 #include "core/common/log.h"
@@ -20,12 +21,27 @@
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "ui/job_runner.h"
+#include "ui/network_panel.h"
 #include "ui/project_panels.h"
 #include "ui/scan_cloud_actors.h"
 #include "ui/view_3d.h"
 
 namespace scanreg::ui {
 namespace {
+
+// An edit of the project (override, accept / reject), undone by restoring the snapshot before it.
+class EditCommand : public QUndoCommand {
+ public:
+  EditCommand(MainWindow* window, const QString& text, io::Project before, io::Project after, bool rerun)
+      : QUndoCommand(text), window_(window), before_(std::move(before)), after_(std::move(after)), rerun_(rerun) {}
+  void undo() override { window_->ApplyEdit(before_, false); }
+  void redo() override { window_->ApplyEdit(after_, rerun_); }
+
+ private:
+  MainWindow* window_;
+  io::Project before_, after_;
+  bool rerun_;
+};
 
 struct LoadedProject {
   io::Project project;
@@ -49,6 +65,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   setWindowTitle(tr("scanreg — terrestrial laser scan registration"));
   setObjectName("MainWindow");
   jobs_ = new JobRunner(this);
+  undo_ = new QUndoStack(this);
   view3d_ = new View3d(this);
   view3d_->setObjectName("View3d");
   setCentralWidget(view3d_);
@@ -99,9 +116,14 @@ MainWindow::~MainWindow() { SetLogHandler({}); }
 void MainWindow::CreateDocks() {
   scan_list_ = new ScanListPanel(this);
   confusion_panel_ = new ConfusionPanel(this);
+  network_ = new NetworkPanel(this);
   log_ = new LogPanel(this);
-  const std::pair<QWidget*, QString> docks[] = {
-      {scan_list_, tr("Scans")}, {confusion_panel_, tr("Confusion matrix")}, {log_, tr("Log")}};
+  connect(network_, &NetworkPanel::ParentOverrideRequested, this, &MainWindow::SetParentOverride);
+  connect(network_, &NetworkPanel::LinkDecisionRequested, this, &MainWindow::SetLinkDecision);
+  const std::pair<QWidget*, QString> docks[] = {{scan_list_, tr("Scans")},
+                                                {network_, tr("Scan network")},
+                                                {confusion_panel_, tr("Confusion matrix")},
+                                                {log_, tr("Log")}};
   for (const auto& [widget, title] : docks) {
     auto* dock = new QDockWidget(title, this);
     dock->setObjectName(widget->objectName() + "Dock");
@@ -133,6 +155,14 @@ void MainWindow::CreateMenus() {
   file->addSeparator();
   QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
   quit->setShortcut(QKeySequence::Quit);
+
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
+  undo->setShortcut(QKeySequence::Undo);
+  QAction* redo = undo_->createRedoAction(this, tr("&Redo"));
+  redo->setShortcut(QKeySequence::Redo);
+  edit->addAction(undo);
+  edit->addAction(redo);
 
   QMenu* reg = menuBar()->addMenu(tr("&Registration"));
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
@@ -216,11 +246,51 @@ bool MainWindow::SaveProject(const QString& path) {
   return true;
 }
 
+void MainWindow::SetParentOverride(const QString& child, const QString& parent) {
+  const int c = project_.FindScan(child.toStdString());
+  if (c < 0 || child == parent || (!parent.isEmpty() && project_.FindScan(parent.toStdString()) < 0)) return;
+  io::Project after = project_;
+  if (parent.isEmpty()) {
+    after.scans[c].parent_override.reset();
+  } else {
+    after.scans[c].parent_override = parent.toStdString();
+  }
+  const QString text = parent.isEmpty() ? tr("clear the parent of %1").arg(child)
+                                        : tr("register %1 to %2").arg(child, parent);
+  undo_->push(new EditCommand(this, text, project_, std::move(after), true));
+}
+
+void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject) {
+  io::Project after = project_;
+  bool found = false;
+  for (io::LinkRecord& l : after.links) {
+    if (l.parent != parent.toStdString() || l.child != child.toStdString()) continue;
+    l.user_accepted = accept;
+    l.user_rejected = reject;
+    found = true;
+  }
+  if (!found) return;
+  const QString text = reject ? tr("reject %1 → %2").arg(child, parent)
+                              : accept ? tr("accept %1 → %2").arg(child, parent)
+                                       : tr("clear the decision on %1 → %2").arg(child, parent);
+  undo_->push(new EditCommand(this, text, project_, std::move(after), reject));
+}
+
+void MainWindow::ApplyEdit(const io::Project& project, bool rerun) {
+  project_ = project;
+  for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
+    scans_[i].world_from_scan = project_.scans[i].world_from_scan;
+  dirty_ = true;
+  Refresh();
+  if (rerun && !jobs_->busy()) RegisterProject();
+}
+
 void MainWindow::OnJobSucceeded(const QString& title, std::any result) {
   SetBusy(false);
   if (auto* loaded = std::any_cast<LoadedProject>(&result)) {
     project_ = std::move(loaded->project);
     scans_ = std::move(loaded->scans);
+    undo_->clear();
     confusion_.resize(0, 0);
     dirty_ = false;
     QSettings().setValue("recent/project", QString::fromStdString(project_.file.string()));
@@ -250,6 +320,7 @@ void MainWindow::Refresh() {
   std::vector<std::string> names;
   for (const io::ProjectScan& s : project_.scans) names.push_back(s.name);
   if (confusion_.size() > 0) confusion_panel_->Show(confusion_, names);
+  network_->Show(project_);
   bool any_registered = false;
   for (const io::ProjectScan& s : project_.scans) any_registered |= s.registered;
   // Before registration, show the scans as they stand (each at its current pose).

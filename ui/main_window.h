@@ -14,12 +14,14 @@
 class QAction;
 class QProgressBar;
 class QPushButton;
+class QUndoStack;
 
 namespace scanreg::ui {
 
 class ConfusionPanel;
 class JobRunner;
 class LogPanel;
+class NetworkPanel;
 class ScanListPanel;
 class View3d;
 
@@ -36,6 +38,13 @@ class MainWindow : public QMainWindow {
   bool RegisterProject();
   bool SaveProject(const QString& path);  // synchronous, atomic
 
+  // The user's edits, undoable. A parent override re-runs the registration when no job runs.
+  void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
+  void SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject);
+  QUndoStack* undoStack() const { return undo_; }
+  // Replaces the project with an edited version (used by the undo commands).
+  void ApplyEdit(const io::Project& project, bool rerun);
+
   JobRunner* jobs() const { return jobs_; }
   View3d* view3d() const { return view3d_; }
   const io::Project& project() const { return project_; }
@@ -43,6 +52,7 @@ class MainWindow : public QMainWindow {
   const Eigen::MatrixXi& confusion() const { return confusion_; }
   ScanListPanel* scanList() const { return scan_list_; }
   ConfusionPanel* confusionPanel() const { return confusion_panel_; }
+  NetworkPanel* networkPanel() const { return network_; }
   bool dirty() const { return dirty_; }
 
   // Renders the window (including the VTK view) into a PNG; returns false on failure.
@@ -72,6 +82,8 @@ class MainWindow : public QMainWindow {
   ScanListPanel* scan_list_ = nullptr;
   ConfusionPanel* confusion_panel_ = nullptr;
   LogPanel* log_ = nullptr;
+  NetworkPanel* network_ = nullptr;
+  QUndoStack* undo_ = nullptr;
   QProgressBar* progress_ = nullptr;
   QPushButton* cancel_ = nullptr;
   std::vector<QAction*> project_actions_;  // enabled only with a project and no job

@@ -3,6 +3,7 @@
 #include <QElapsedTimer>
 #include <QMenuBar>
 #include <QMessageBox>
+#include <QUndoStack>
 #include <QSignalSpy>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
@@ -12,6 +13,7 @@
 #include "core/io/project.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/network_panel.h"
 #include "ui/project_panels.h"
 #include "ui/view_3d.h"
 
@@ -43,7 +45,7 @@ class MainWindowTest : public QObject {
     QVERIFY(QTest::qWaitForWindowExposed(&window));
     QStringList menus;
     for (QAction* a : window.menuBar()->actions()) menus << a->text().remove('&');
-    QCOMPARE(menus, QStringList({"File", "Registration", "View", "Help"}));
+    QCOMPARE(menus, QStringList({"File", "Edit", "Registration", "View", "Help"}));
     QCOMPARE(window.view3d()->PropCount(), 0);
     QVERIFY(!window.RegisterProject());  // nothing to register without a project
   }
@@ -116,6 +118,32 @@ class MainWindowTest : public QObject {
     QVERIFY2(registered >= 4, qPrintable(QString("%1 registered").arg(registered)));
     QVERIFY(window.dirty());
 
+    QCOMPARE(window.networkPanel()->NodeCount(), 5);
+    QVERIFY(window.networkPanel()->EdgeCount() >= registered - 1);
+
+    // Override s05's parent: undoable, and the registration re-runs with the override.
+    const std::string old_parent = [&] {
+      for (const auto& l : window.project().links)
+        if (l.child == "s05" && !l.loop_check && l.status != scanreg::io::LinkStatus::kFailed) return l.parent;
+      return std::string();
+    }();
+    const QString new_parent = old_parent == "s03" ? "s02" : "s03";
+    const Eigen::Matrix4d pose_before = window.project().scans[4].world_from_scan.matrix();
+    const bool registered_before = window.project().scans[4].registered;
+    window.SetParentOverride("s05", new_parent);
+    QCOMPARE(QString::fromStdString(window.project().scans[4].parent_override.value_or("")), new_parent);
+    QVERIFY(window.jobs()->busy());
+    QVERIFY(WaitForJob(window, 600000));
+    bool tried = false;
+    for (const auto& l : window.project().links) tried |= l.child == "s05" && l.parent == new_parent.toStdString();
+    QVERIFY2(tried, "the overridden link was registered (or reported failed)");
+    QVERIFY(window.undoStack()->canUndo());
+    window.undoStack()->undo();
+    QVERIFY(!window.project().scans[4].parent_override.has_value());
+    // Undo restores the registration as it was before the override.
+    QCOMPARE(window.project().scans[4].registered, registered_before);
+    QVERIFY(window.project().scans[4].world_from_scan.matrix() == pose_before);
+
     // Save and re-read: the registration is in the file.
     const QString path = dir.filePath("saved.scanreg.json");
     QVERIFY(window.SaveProject(path));
@@ -124,7 +152,10 @@ class MainWindowTest : public QObject {
     QVERIFY(saved.ok());
     int saved_registered = 0;
     for (const auto& s : saved->scans) saved_registered += s.registered;
-    QCOMPARE(saved_registered, registered);
+    int shown_registered = 0;
+    for (const auto& s : window.project().scans) shown_registered += s.registered;
+    QCOMPARE(saved_registered, shown_registered);
+    QVERIFY(!saved->scans[4].parent_override.has_value());
   }
 };
 
