@@ -198,7 +198,9 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
 Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                   const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
-  auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel);
+  std::vector<const Scan*> ptrs;
+  for (const Scan& s : scans) ptrs.push_back(&s);
+  auto patches = BuildRangePatches(ptrs, options.max_grazing_deg, cancel);
   if (!patches) return patches.error();
   return ComputeField(*patches, options, progress, cancel);
 }

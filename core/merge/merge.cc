@@ -10,10 +10,17 @@ namespace scanreg::merge {
 
 Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                    const CancelToken& cancel) {
+  std::vector<const Scan*> ptrs;
+  for (const Scan& s : scans) ptrs.push_back(&s);
+  return MergeScanSet(ptrs, options, progress, cancel);
+}
+
+Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const MergeOptions& options,
+                                   ProgressSink& progress, const CancelToken& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = options.Validate(); !s) return s.error();
-  for (const Scan& s : scans) {
-    if (Status v = s.Validate(); !v) return v.error();
+  for (const Scan* s : scans) {
+    if (Status v = s->Validate(); !v) return v.error();
   }
   progress.Report(0.0, "meshing the range images");
   auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel);

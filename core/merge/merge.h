@@ -27,5 +27,8 @@ struct MergeResult {
 // All scans must be registered (world_from_scan set). Cancelled: kCancelled, no result.
 Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                    const CancelToken& cancel);
+// The same without copying: the scans to merge, by pointer.
+Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const MergeOptions& options,
+                                   ProgressSink& progress, const CancelToken& cancel);
 
 }  // namespace scanreg::merge

@@ -43,23 +43,23 @@ Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Ve
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-Expected<RangePatches> BuildRangePatches(const std::vector<Scan>& scans, double max_grazing_deg,
+Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
                                          const CancelToken& cancel) {
   RangePatches out;
   // Origin: the first scanner position, rounded to a metre (keeps UTM offsets out of the floats).
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   std::size_t total = 0;
-  for (const Scan& s : scans) total += s.CountValid();
+  for (const Scan* s : scans) total += s->CountValid();
   if (total == 0) {
     std::string names;
-    for (const Scan& s : scans) names += (names.empty() ? "" : ", ") + s.name;
+    for (const Scan* s : scans) names += (names.empty() ? "" : ", ") + s->name;
     return MakeError(ErrorCode::kInvalidArgument,
                      scans.empty() ? "merge: no scan to merge (mark scans registered first)"
                                    : "merge: the scans to merge (" + names + ") have no valid point");
   }
-  for (const Scan& s : scans) {
-    if (s.CountValid()) {
-      origin = s.world_from_scan.translation().array().round();
+  for (const Scan* s : scans) {
+    if (s->CountValid()) {
+      origin = s->world_from_scan.translation().array().round();
       break;
     }
   }
@@ -68,7 +68,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<Scan>& scans, double 
   const float cos_grazing = float(std::cos(max_grazing_deg * M_PI / 180.0));
   for (std::size_t si = 0; si < scans.size(); ++si) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled while meshing the scans");
-    const Scan& s = scans[si];
+    const Scan& s = *scans[si];
     Eigen::Isometry3d shifted = s.world_from_scan;
     shifted.translation() -= origin;
     const Eigen::Isometry3f t = shifted.cast<float>();

@@ -41,7 +41,7 @@ struct RangePatches {
 // Triangulates the valid cells of every scan at its world_from_scan. Skips triangles with an edge
 // over 8x the scan's median grid spacing (depth edges) or seen more obliquely than max_grazing_deg.
 // Errors name the scan when no scan has a valid point.
-Expected<RangePatches> BuildRangePatches(const std::vector<Scan>& scans, double max_grazing_deg,
+Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
                                          const CancelToken& cancel);
 
 // Nearest point to x on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).

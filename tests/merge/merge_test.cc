@@ -205,11 +205,11 @@ TEST(MergeScans, BadOptionsAndEmptyInputAreClearErrors) {
   options.voxel_m = -1;
   EXPECT_FALSE(MergeScanSet(scans, options, progress, cancel));
   options.voxel_m = 0.02;
-  auto none = MergeScanSet({}, options, progress, cancel);
+  auto none = MergeScanSet(std::vector<Scan>{}, options, progress, cancel);
   ASSERT_FALSE(none);
   EXPECT_NE(none.error().message.find("no scan"), std::string::npos);
   Scan empty("empty_scan", 4, 4);
-  auto no_points = MergeScanSet({empty}, options, progress, cancel);
+  auto no_points = MergeScanSet(std::vector<Scan>{empty}, options, progress, cancel);
   ASSERT_FALSE(no_points);
   EXPECT_NE(no_points.error().message.find("empty_scan"), std::string::npos);
 }

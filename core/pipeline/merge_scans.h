@@ -1,0 +1,31 @@
+// Merging a project's registered scans into one mesh (SPEC §4), and writing it. The CLI and the
+// GUI both run these.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/merge/merge.h"
+#include "core/merge/merge_options.h"
+#include "core/merge/mesh.h"
+
+namespace scanreg::pipeline {
+
+using merge::MergeMethod;
+using merge::MergeOptions;
+using merge::MergeResult;
+using merge::Mesh;
+
+// Merges scans[i] where use[i] (all scans when `use` is empty); their world_from_scan must be the
+// registered poses. Errors: bad options (naming the option), no scan selected, no valid point
+// (naming the scans), cancelled (kCancelled; nothing is written anywhere).
+Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vector<bool>& use,
+                                 const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel);
+
+// Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic.
+Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);
+
+}  // namespace scanreg::pipeline
