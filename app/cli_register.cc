@@ -114,15 +114,8 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
   CancelToken cancel;
   auto loaded = pipeline::LoadProjectScans(project, progress, cancel);
   if (!loaded) return Fail(loaded.error());
-  std::vector<std::optional<std::string>> overrides;
-  for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
-  std::vector<std::pair<std::string, std::string>> rejected;
-  for (const io::LinkRecord& l : project.links)
-    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
-  if (!options.root && project.root) options.root = project.root;
-  auto result = pipeline::RegisterScans(*loaded, overrides, rejected, options, progress, cancel);
+  auto result = pipeline::RegisterProjectScans(project, *loaded, options, progress, cancel);
   if (!result) return Fail(result.error());
-  pipeline::ApplyRegistration(*result, project);
   if (Status s = io::SaveProject(project, project.file); !s) return Fail(s.error());
   const auto errors = pipeline::ReferenceErrors(*result, *loaded);
   if (json) {

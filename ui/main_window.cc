@@ -221,16 +221,9 @@ bool MainWindow::RegisterProject() {
   options.feature_cache_dir = project_.file.parent_path() / ".scanreg-cache";
   return jobs_->Start(tr("Registering"), [project = project_, scans = scans_, options](
                                              ProgressSink& progress, const CancelToken& cancel) mutable {
-    std::vector<std::optional<std::string>> overrides;
-    for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
-    std::vector<std::pair<std::string, std::string>> rejected;
-    for (const io::LinkRecord& l : project.links)
-      if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
-    if (!options.root && project.root) options.root = project.root;
     Expected<pipeline::ProjectRegistration> r =
-        pipeline::RegisterScans(scans, overrides, rejected, options, progress, cancel);
+        pipeline::RegisterProjectScans(project, scans, options, progress, cancel);
     if (!r) return Expected<std::any>(r.error());
-    pipeline::ApplyRegistration(*r, project);
     return Expected<std::any>(std::any(Registered{std::move(project), r->confusion}));
   });
 }

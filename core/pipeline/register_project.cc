@@ -13,7 +13,6 @@
 #include "core/geometry/transform.h"
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
-#include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_pair.h"
 #include "core/registration/scan_order.h"
 
@@ -282,20 +281,16 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
   if (result.root >= 0) project.root = project.scans[result.root].name;
 }
 
-Expected<ProjectRegistration> RegisterProject(io::Project& project, const RegisterOptions& options,
-                                              ProgressSink& progress, const CancelToken& cancel) {
-  SubProgress load_progress(progress, 0.0, 0.2);
-  Expected<std::vector<Scan>> scans = LoadProjectScans(project, load_progress, cancel);
-  if (!scans) return scans.error();
+Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
+                                                   RegisterOptions options, ProgressSink& progress,
+                                                   const CancelToken& cancel) {
   std::vector<std::optional<std::string>> overrides;
   for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
   std::vector<std::pair<std::string, std::string>> rejected;
   for (const io::LinkRecord& l : project.links)
     if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
-  RegisterOptions opts = options;
-  if (!opts.root && project.root) opts.root = project.root;
-  SubProgress reg_progress(progress, 0.2, 1.0);
-  Expected<ProjectRegistration> result = RegisterScans(*scans, overrides, rejected, opts, reg_progress, cancel);
+  if (!options.root && project.root) options.root = project.root;
+  Expected<ProjectRegistration> result = RegisterScans(scans, overrides, rejected, options, progress, cancel);
   if (!result) return result.error();
   ApplyRegistration(*result, project);
   return result;

@@ -46,10 +46,11 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
 // Writes the result into the project: poses, registered flags, links and root.
 void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
 
-// Loads the project's scans, registers them with the project's overrides and rejections, and
-// updates the project (not saved).
-Expected<ProjectRegistration> RegisterProject(io::Project& project, const RegisterOptions& options,
-                                              ProgressSink& progress, const CancelToken& cancel);
+// Registers the project's (already loaded) scans with the project's root, parent overrides and
+// rejected links, and writes the result into the project (not saved).
+Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
+                                                   RegisterOptions options, ProgressSink& progress,
+                                                   const CancelToken& cancel);
 
 // Error of a registered pose against the reference, both taken relative to the root (so the
 // datum of the registration does not matter).
