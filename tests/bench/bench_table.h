@@ -38,5 +38,6 @@ double PeakMemoryMiB();
 // Sections. Each takes the table and a "quick" flag (smaller sizes for a smoke run).
 void RunIoBench(Table& table, bool quick);
 void RunSimulateBench(Table& table, bool quick);
+void RunRegisterBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench
