@@ -111,6 +111,16 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
   double sum = 0.0, weight = 0.0;
   for (std::size_t s = 0; s < nearest.size(); ++s) {
     if (nearest[s].second < 0) continue;
+    if (!patches.views[s].empty()) {
+      // Curless-Levoy: project x into the scan's range image.
+      float surface = 0.0f, range = 0.0f;
+      if (!patches.views[s].RangeAlong(x, float(band), &surface, &range)) continue;
+      const float sdf = surface - range;  // > 0: x lies in front of the surface (outside)
+      if (std::abs(sdf) > band) continue;
+      sum += sdf;
+      weight += 1.0;
+      continue;
+    }
     const Patch& p = patches.patches[nearest[s].second];
     const Eigen::Vector3f& eye = patches.scanner[s];
     const Eigen::Vector3f ray = x - eye;
@@ -188,6 +198,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
     if (k * 200 / n != (k - 1) * 200 / n) progress.Report(double(k) / n, stage);
   }
   if (cancelled || cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+  FixIsolatedSigns(grid);
   if (options.smooth_iterations > 0) {
     progress.Report(1.0, "smoothing the field");
     SmoothField(grid, options.smooth_iterations);

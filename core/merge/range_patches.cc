@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace scanreg::merge {
 
@@ -20,7 +21,54 @@ double MedianSpacing(const Scan& scan) {
   return d[d.size() / 2];
 }
 
+// Index i0 and fraction t with v between a[i0] and a[i0 + 1] (a monotonic, either direction);
+// within half a step beyond the ends counts as the end cell.
+bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
+  const int n = int(a.size());
+  if (n < 2) return false;
+  const bool inc = a.back() > a.front();
+  const int i = int((inc ? std::lower_bound(a.begin(), a.end(), v)
+                         : std::lower_bound(a.begin(), a.end(), v, std::greater<float>())) - a.begin());
+  if (i == 0) {
+    if (std::abs(v - a[0]) > 0.5f * std::abs(a[1] - a[0])) return false;
+    *i0 = 0, *t = 0.0f;
+    return true;
+  }
+  if (i == n) {
+    if (std::abs(v - a[n - 1]) > 0.5f * std::abs(a[n - 1] - a[n - 2])) return false;
+    *i0 = n - 2, *t = 1.0f;
+    return true;
+  }
+  *i0 = i - 1;
+  *t = (v - a[i - 1]) / (a[i] - a[i - 1]);
+  return true;
+}
+
 }  // namespace
+
+bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range,
+                           float* voxel_range) const {
+  if (empty()) return false;
+  const Eigen::Vector3f q = scan_from_world * (x - eye);
+  const float r = q.norm();
+  if (!(r > 0.0f)) return false;
+  int c0, r0;
+  float tc, tr;
+  if (!Locate(angles.azimuth, std::atan2(q.y(), q.x()), &c0, &tc)) return false;
+  if (!Locate(angles.elevation, std::atan2(q.z(), std::hypot(q.x(), q.y())), &r0, &tr)) return false;
+  const float v00 = range[r0 * cols + c0], v01 = range[r0 * cols + c0 + 1];
+  const float v10 = range[(r0 + 1) * cols + c0], v11 = range[(r0 + 1) * cols + c0 + 1];
+  *voxel_range = r;
+  const float lo = std::min({v00, v01, v10, v11}), hi = std::max({v00, v01, v10, v11});
+  if (lo > 0.0f && hi - lo <= max_jump_m) {
+    *surface_range = (1 - tr) * ((1 - tc) * v00 + tc * v01) + tr * ((1 - tc) * v10 + tc * v11);
+    return true;
+  }
+  const float nearest = tr < 0.5f ? (tc < 0.5f ? v00 : v01) : (tc < 0.5f ? v10 : v11);
+  if (nearest <= 0.0f) return false;
+  *surface_range = nearest;
+  return true;
+}
 
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
                                        const Eigen::Vector3f& c) {
@@ -74,6 +122,17 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
     const Eigen::Isometry3f t = shifted.cast<float>();
     const Eigen::Vector3f eye = t.translation();
     out.scanner.push_back(eye);
+    RangeView& view = out.views.emplace_back();
+    if (!s.angles.empty() && int(s.angles.azimuth.size()) == s.cols && int(s.angles.elevation.size()) == s.rows) {
+      view.scan_from_world = t.linear().transpose();
+      view.eye = eye;
+      view.angles = s.angles;
+      view.rows = s.rows, view.cols = s.cols;
+      view.range.assign(s.size(), -1.0f);
+      for (std::size_t i = 0; i < s.size(); ++i) {
+        if (s.valid[i]) view.range[i] = s.points[i].norm();
+      }
+    }
     const double spacing = MedianSpacing(s);
     const float max_edge2 = float(std::pow(8.0 * spacing, 2));
     std::vector<int> id(s.size(), -1);

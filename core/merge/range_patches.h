@@ -21,7 +21,21 @@ struct Patch {
   int scan = 0;             // index into the input scans
 };
 
+// A scan's range image for Curless–Levoy projection (only for scans with an angular grid).
+struct RangeView {
+  Eigen::Matrix3f scan_from_world = Eigen::Matrix3f::Identity();  // rotation
+  Eigen::Vector3f eye = Eigen::Vector3f::Zero();                  // scanner, world minus origin
+  AngularGrid angles;
+  std::vector<float> range;  // rows*cols, metres; < 0 where the cell is empty
+  int rows = 0, cols = 0;
+  bool empty() const { return angles.empty(); }
+  // Range of the scan's surface along the line of sight through x (bilinear over the 2x2 cells
+  // around it when they agree within max_jump_m, else the nearest cell); false outside the grid.
+  bool RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range, float* voxel_range) const;
+};
+
 struct RangePatches {
+  std::vector<RangeView> views;             // per scan (empty views for scans without angles)
   Eigen::Vector3d origin;                   // world position of (0, 0, 0)
   std::vector<Eigen::Vector3f> points;      // world minus origin
   std::vector<Patch> patches;

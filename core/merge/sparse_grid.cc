@@ -45,6 +45,41 @@ bool SparseGrid::Sample(int i, int j, int k, float* distance) const {
   return true;
 }
 
+std::size_t FixIsolatedSigns(SparseGrid& grid) {
+  constexpr int B = SparseGrid::kBlock;
+  const float min_abs = float(grid.voxel());
+  std::vector<std::vector<int>> flips(grid.num_blocks());
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long bi = 0; bi < long(grid.num_blocks()); ++bi) {
+    const SparseGrid::Block& b = grid.block(bi);
+    for (int z = 0; z < B; ++z) {
+      for (int y = 0; y < B; ++y) {
+        for (int x = 0; x < B; ++x) {
+          const int l = SparseGrid::Local(x, y, z);
+          if (b.weight[l] <= 0.0f || std::abs(b.distance[l]) < min_abs) continue;
+          const bool positive = b.distance[l] > 0.0f;
+          const int i = b.key.x * B + x, j = b.key.y * B + y, k = b.key.z * B + z;
+          int known = 0, other = 0;
+          for (int dz = -1; dz <= 1; ++dz) {
+            for (int dy = -1; dy <= 1; ++dy) {
+              for (int dx = -1; dx <= 1; ++dx) {
+                float d;
+                if ((dx || dy || dz) && grid.Sample(i + dx, j + dy, k + dz, &d)) ++known, other += (d > 0.0f) != positive;
+              }
+            }
+          }
+          if (known >= 6 && 3 * other >= 2 * known) flips[bi].push_back(l);
+        }
+      }
+    }
+  }
+  std::size_t n = 0;
+  for (std::size_t bi = 0; bi < flips.size(); ++bi) {
+    for (int l : flips[bi]) grid.block(bi).distance[l] = -grid.block(bi).distance[l], ++n;
+  }
+  return n;
+}
+
 void SmoothField(SparseGrid& grid, int iterations) {
   constexpr int B = SparseGrid::kBlock;
   for (int it = 0; it < iterations; ++it) {

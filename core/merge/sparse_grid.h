@@ -63,6 +63,11 @@ class SparseGrid {
 
 inline int FloorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
+// Flips the sign of grid points at least one voxel from the zero level whose known 26 neighbours
+// mostly (>= 2/3) have the other sign: isolated sign errors far from the surface would otherwise
+// become bubbles or holes at the band's edge. Returns the number flipped.
+std::size_t FixIsolatedSigns(SparseGrid& grid);
+
 // Mean filter over the known 3x3x3 neighbours of each known grid point, `iterations` times.
 void SmoothField(SparseGrid& grid, int iterations);
 

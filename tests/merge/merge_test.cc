@@ -26,7 +26,7 @@ std::vector<Scan> SphereScans(const Eigen::Vector3d& c, double r, double sigma) 
   std::vector<Scan> scans;
   int i = 0;
   for (const auto& eye : AllAroundEyes(c, 3.0)) {
-    scans.push_back(MakeWindowScan(SphereCaster(c, r), eye, c, 100, 100, 0.2, sigma, 7 + i, "v" + std::to_string(i)));
+    scans.push_back(MakeWindowScan(SphereCaster(c, r), eye, c, 80, 80, 0.2, sigma, 7 + i, "v" + std::to_string(i)));
     ++i;
   }
   return scans;
@@ -39,7 +39,7 @@ TEST_P(SphereMerge, WatertightAndBelowInputNoise) {
   const double r = 0.5, sigma = 0.01;
   const auto scans = SphereScans(c, r, sigma);
   MergeOptions options;
-  options.voxel_m = 0.02;
+  options.voxel_m = 0.025;
   options.sigma_m = sigma;
   options.method = GetParam();
   NullProgress progress;
@@ -75,16 +75,16 @@ TEST(MergeField, SignsInsideAndOutsideSphere) {
   const auto scans = SphereScans(c, r, sigma);
   for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
     MergeOptions options;
-    options.voxel_m = 0.02;
+    options.voxel_m = 0.025;
     options.sigma_m = sigma;
-    options.band_m = 0.1;
+    options.band_m = 0.075;
     options.method = method;
     NullProgress progress;
     CancelToken cancel;
     auto grid = ComputeField(scans, options, progress, cancel);
     ASSERT_TRUE(grid) << grid.error().ToString();
     int checked = 0, right = 0;
-    double abs_error = 0.0;
+    double abs_error = 0.0, abs_truth = 0.0;
     for (std::size_t b = 0; b < grid->num_blocks(); ++b) {
       const auto& block = grid->block(b);
       for (int z = 0; z < 8; ++z) {
@@ -94,17 +94,22 @@ TEST(MergeField, SignsInsideAndOutsideSphere) {
             if (block.weight[l] <= 0) continue;
             const Eigen::Vector3d p = grid->origin() + grid->Position(block.key, x, y, z).cast<double>();
             const double truth = (p - c).norm() - r;  // negative inside
-            if (std::abs(truth) < 0.03 || std::abs(truth) > 0.07) continue;
+            if (std::abs(truth) < 0.03 || std::abs(truth) > 0.06) continue;
             ++checked;
             right += (block.distance[l] > 0) == (truth > 0);
             abs_error += std::abs(block.distance[l] - truth);
+            abs_truth += std::abs(truth);
           }
         }
       }
     }
-    ASSERT_GT(checked, 1000) << MergeMethodName(method);
+    ASSERT_GT(checked, 5000) << MergeMethodName(method);
     EXPECT_GT(right, 0.99 * checked) << MergeMethodName(method);
-    EXPECT_LT(abs_error / checked, 0.5 * 0.05) << MergeMethodName(method);  // magnitudes, not just signs
+    // Magnitudes, not just signs. ML's distance 3-6 cm off the surface runs ~2 sigma short (the
+    // nearest of many noisy patches); TSDF's is along the line of sight (longer when oblique).
+    std::printf("%s field 3-6 cm from the sphere: mean |error| %.4f m, mean |distance| %.4f m\n",
+                MergeMethodName(method), abs_error / checked, abs_truth / checked);
+    EXPECT_LT(abs_error, 0.6 * abs_truth) << MergeMethodName(method);
   }
 }
 
