@@ -39,5 +39,6 @@ double PeakMemoryMiB();
 void RunIoBench(Table& table, bool quick);
 void RunSimulateBench(Table& table, bool quick);
 void RunRegisterBench(Table& table, bool quick);
+void RunEmBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench
