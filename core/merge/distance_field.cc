@@ -11,6 +11,16 @@ namespace {
 
 constexpr int kMaxBins = 512;
 
+// erf to 1.5e-7 (Abramowitz & Stegun 7.1.26), several times faster than std::erf.
+inline double FastErf(double x) {
+  const double a = std::abs(x);
+  const double t = 1.0 / (1.0 + 0.3275911 * a);
+  const double y =
+      1.0 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t *
+                std::exp(-a * a);
+  return x < 0 ? -y : y;
+}
+
 }  // namespace
 
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
@@ -65,7 +75,7 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
     const int k0 = std::clamp(int(std::floor((n.dist - 6.0 * n.sigma - d_lo) / bin)), 0, bins);
     const int k1 = std::clamp(int(std::ceil((n.dist + 6.0 * n.sigma - d_lo) / bin)), 0, bins);
     for (int k = 0; k < k0; ++k) cdf[k] = 0.0;
-    for (int k = k0; k <= k1; ++k) cdf[k] = 0.5 * (1.0 + std::erf((d_lo + k * bin - n.dist) * inv));
+    for (int k = k0; k <= k1; ++k) cdf[k] = 0.5 * (1.0 + FastErf((d_lo + k * bin - n.dist) * inv));
     for (int k = k1 + 1; k <= bins; ++k) cdf[k] = 1.0;
     for (int k = k0; k < bins; ++k) {
       const double in_bin = cdf[k + 1] - cdf[k];  // P(d_k <= D_p < d_{k+1})
@@ -211,7 +221,7 @@ Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOpt
   if (Status s = options.Validate(); !s) return s.error();
   std::vector<const Scan*> ptrs;
   for (const Scan& s : scans) ptrs.push_back(&s);
-  auto patches = BuildRangePatches(ptrs, options.max_grazing_deg, cancel);
+  auto patches = BuildRangePatches(ptrs, options.max_grazing_deg, cancel, options.voxel_m);
   if (!patches) return patches.error();
   return ComputeField(*patches, options, progress, cancel);
 }

@@ -23,7 +23,7 @@ Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const 
     if (Status v = s->Validate(); !v) return v.error();
   }
   progress.Report(0.0, "meshing the range images");
-  auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel);
+  auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel, options.voxel_m);
   if (!patches) return patches.error();
   MergeResult result;
   result.scans = scans.size();

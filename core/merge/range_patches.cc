@@ -92,7 +92,7 @@ Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Ve
 }
 
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel) {
+                                         const CancelToken& cancel, double voxel_m) {
   RangePatches out;
   // Origin: the first scanner position, rounded to a metre (keeps UTM offsets out of the floats).
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
@@ -134,10 +134,11 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
       }
     }
     const double spacing = MedianSpacing(s);
-    const float max_edge2 = float(std::pow(8.0 * spacing, 2));
+    const int stride = spacing > 0 ? std::clamp(int(0.5 * voxel_m / spacing), 1, 8) : 1;
+    const float max_edge2 = float(std::pow(8.0 * spacing * stride, 2));
     std::vector<int> id(s.size(), -1);
     for (std::size_t i = 0; i < s.size(); ++i) {
-      if (!s.valid[i]) continue;
+      if (!s.valid[i] || (int(i / s.cols) % stride) || (int(i % s.cols) % stride)) continue;
       id[i] = int(out.points.size());
       out.points.push_back(t * s.points[i]);
     }
@@ -161,10 +162,10 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
       const float r = std::max({(pa - centroid).norm(), (pb - centroid).norm(), (pc - centroid).norm()});
       out.max_patch_radius = std::max(out.max_patch_radius, double(r));
     };
-    for (int r = 0; r + 1 < s.rows; ++r) {
-      for (int c = 0; c + 1 < s.cols; ++c) {
-        const int p00 = id[s.Index(r, c)], p01 = id[s.Index(r, c + 1)];
-        const int p10 = id[s.Index(r + 1, c)], p11 = id[s.Index(r + 1, c + 1)];
+    for (int r = 0; r + stride < s.rows; r += stride) {
+      for (int c = 0; c + stride < s.cols; c += stride) {
+        const int p00 = id[s.Index(r, c)], p01 = id[s.Index(r, c + stride)];
+        const int p10 = id[s.Index(r + stride, c)], p11 = id[s.Index(r + stride, c + stride)];
         if (p00 >= 0 && p01 >= 0 && p10 >= 0 && p11 >= 0) {
           // Split along the shorter diagonal.
           if ((out.points[p00] - out.points[p11]).squaredNorm() <= (out.points[p01] - out.points[p10]).squaredNorm()) {
@@ -188,10 +189,13 @@ void RangePatches::BuildHash(double cell_m) {
   cell = std::max(cell_m, 1e-6);
   hash.clear();
   centroid.resize(patches.size());
+  radius.resize(patches.size());
   const double inv = 1.0 / cell;
   for (std::size_t i = 0; i < patches.size(); ++i) {
     const Patch& p = patches[i];
     centroid[i] = (points[p.v[0]] + points[p.v[1]] + points[p.v[2]]) / 3.0f;
+    radius[i] = std::max({(points[p.v[0]] - centroid[i]).norm(), (points[p.v[1]] - centroid[i]).norm(),
+                          (points[p.v[2]] - centroid[i]).norm()});
     const BlockKey k{int(std::floor(centroid[i].x() * inv)), int(std::floor(centroid[i].y() * inv)),
                      int(std::floor(centroid[i].z() * inv))};
     hash[k].push_back(int(i));
@@ -200,7 +204,7 @@ void RangePatches::BuildHash(double cell_m) {
 
 void RangePatches::Candidates(const Eigen::Vector3f& x, double radius, std::vector<int>* out) const {
   out->clear();
-  const double r = radius + max_patch_radius;
+  const double r = radius + max_patch_radius;  // cells to visit
   const float r2 = float(r * r);
   const double inv = 1.0 / cell;
   const int x0 = int(std::floor((x.x() - r) * inv)), x1 = int(std::floor((x.x() + r) * inv));
@@ -212,7 +216,10 @@ void RangePatches::Candidates(const Eigen::Vector3f& x, double radius, std::vect
         const auto it = hash.find(BlockKey{i, j, k});
         if (it == hash.end()) continue;
         for (int p : it->second) {
-          if ((centroid[p] - x).squaredNorm() <= r2) out->push_back(p);
+          const float d2 = (centroid[p] - x).squaredNorm();
+          if (d2 > r2) continue;
+          const float reach = float(radius) + this->radius[p];
+          if (d2 <= reach * reach) out->push_back(p);
         }
       }
     }

@@ -50,13 +50,16 @@ struct RangePatches {
   std::unordered_map<BlockKey, std::vector<int>, BlockKeyHash> hash;
   double cell = 1.0;
   std::vector<Eigen::Vector3f> centroid;
+  std::vector<float> radius;  // per patch: centroid-to-vertex
 };
 
 // Triangulates the valid cells of every scan at its world_from_scan. Skips triangles with an edge
 // over 8x the scan's median grid spacing (depth edges) or seen more obliquely than max_grazing_deg.
 // Errors name the scan when no scan has a valid point.
+// Range images much denser than the grid are thinned first: every s-th row and column with
+// s = clamp(floor(0.5 voxel / median spacing), 1, 8) (0 voxel: no thinning).
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel);
+                                         const CancelToken& cancel, double voxel_m = 0.0);
 
 // Nearest point to x on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& x, const Eigen::Vector3f& a, const Eigen::Vector3f& b,

@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   scanreg::bench::RunSimulateBench(table, quick);
   scanreg::bench::RunIoBench(table, quick);
   scanreg::bench::RunRegisterBench(table, quick);
+  scanreg::bench::RunMergeBench(table, quick);
   scanreg::bench::RunEmBench(table, quick);
   table.Add({"process", "peak resident memory", scanreg::bench::PeakMemoryMiB(), "MiB", ""});
   table.Print();

@@ -39,6 +39,7 @@ double PeakMemoryMiB();
 void RunIoBench(Table& table, bool quick);
 void RunSimulateBench(Table& table, bool quick);
 void RunRegisterBench(Table& table, bool quick);
+void RunMergeBench(Table& table, bool quick);
 void RunEmBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench
