@@ -223,7 +223,11 @@ PclPairResult PclRegisterPair(const Scan& parent, const Scan& child, const PclOp
     icp.setMaxCorrespondenceDistance(o.icp_max_distance_m);
     icp.setMaximumIterations(o.icp_iterations);
     icp.align(aligned, guess);
-    r.parent_from_child.matrix() = icp.getFinalTransformation().cast<double>();
+    // PCL's float matrix, re-orthonormalised in double: a float rotation's trace is only good to
+    // ~1e-7, which hides (or clamps to 0) angle errors below ~0.05 deg in ComparePoses.
+    const Eigen::Matrix4d m = icp.getFinalTransformation().cast<double>();
+    r.parent_from_child.linear() = Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
+    r.parent_from_child.translation() = m.topRightCorner<3, 1>();
   });
   return r;
 }
