@@ -6,11 +6,12 @@
 
 namespace scanreg::testing {
 
-Eigen::Isometry3d RidgeViewPose(const RidgeModel& model, double view_deg) {
+Eigen::Isometry3d RidgeViewPose(const RidgeModel& model, double view_deg, bool about_x) {
   const double a = view_deg * M_PI / 180.0;
-  const Eigen::Vector3d o = model.distance * Eigen::Vector3d(std::sin(a), 0.0, std::cos(a));
+  const Eigen::Vector3d o = about_x ? model.distance * Eigen::Vector3d(0.0, std::sin(a), std::cos(a))
+                                    : model.distance * Eigen::Vector3d(std::sin(a), 0.0, std::cos(a));
   const Eigen::Vector3d fwd = -o.normalized();
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d up = about_x ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   Eigen::Matrix3d r;
   r.col(0) = fwd;
   r.col(1) = up.cross(fwd);

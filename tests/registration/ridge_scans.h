@@ -20,9 +20,10 @@ struct RidgeModel {
   double distance = 2.0;                            // camera to origin
 };
 
-// The sensor's pose for a viewing direction tilted view_deg about the world y axis from +z
-// (looking at the origin). Scanner frame: x forward, z = world y.
-Eigen::Isometry3d RidgeViewPose(const RidgeModel& model, double view_deg);
+// The sensor's pose for a viewing direction tilted view_deg from +z (looking at the origin) about
+// the world y axis (the ridge; scanner z = world y), or about the world x axis when about_x
+// (tilting along the ridge; scanner z = world x).
+Eigen::Isometry3d RidgeViewPose(const RidgeModel& model, double view_deg, bool about_x = false);
 
 // One range image from world_from_scan; sigma_m noise along each line of sight (seeded rng).
 Scan CastRidgeScan(const RidgeModel& model, const Eigen::Isometry3d& world_from_scan, double sigma_m,
