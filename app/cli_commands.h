@@ -22,6 +22,7 @@ int RunInfo(const std::vector<std::string>& args);
 int RunExportPoses(const std::vector<std::string>& args);
 int RunConvert(const std::vector<std::string>& args);
 int RunRegister(const std::vector<std::string>& args);
+int RunMerge(const std::vector<std::string>& args);
 
 const std::vector<Command>& Commands();
 

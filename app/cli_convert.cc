@@ -35,6 +35,7 @@ const std::vector<Command>& Commands() {
       {"demo", "simulate a street project (the built-in demo)", RunDemo},
       {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
       {"register", "register every scan of a project automatically (W pipeline)", RunRegister},
+      {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
       {"new", "create a project from PTX / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
       {"export-poses", "write world_from_scan poses as JSON or CloudCompare 4x4 .txt files", RunExportPoses},
