@@ -186,6 +186,8 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
 }
 
 void RangePatches::BuildHash(double cell_m) {
+  // Each patch goes into every cell its bounding box touches, so that a query visits only the
+  // cells around x (large far-range triangles no longer widen every query).
   cell = std::max(cell_m, 1e-6);
   hash.clear();
   centroid.resize(patches.size());
@@ -193,36 +195,42 @@ void RangePatches::BuildHash(double cell_m) {
   const double inv = 1.0 / cell;
   for (std::size_t i = 0; i < patches.size(); ++i) {
     const Patch& p = patches[i];
-    centroid[i] = (points[p.v[0]] + points[p.v[1]] + points[p.v[2]]) / 3.0f;
-    radius[i] = std::max({(points[p.v[0]] - centroid[i]).norm(), (points[p.v[1]] - centroid[i]).norm(),
-                          (points[p.v[2]] - centroid[i]).norm()});
-    const BlockKey k{int(std::floor(centroid[i].x() * inv)), int(std::floor(centroid[i].y() * inv)),
-                     int(std::floor(centroid[i].z() * inv))};
-    hash[k].push_back(int(i));
+    const Eigen::Vector3f &a = points[p.v[0]], &b = points[p.v[1]], &c = points[p.v[2]];
+    centroid[i] = (a + b + c) / 3.0f;
+    radius[i] = std::max({(a - centroid[i]).norm(), (b - centroid[i]).norm(), (c - centroid[i]).norm()});
+    const Eigen::Vector3f lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    const int x0 = int(std::floor(lo.x() * inv)), x1 = int(std::floor(hi.x() * inv));
+    const int y0 = int(std::floor(lo.y() * inv)), y1 = int(std::floor(hi.y() * inv));
+    const int z0 = int(std::floor(lo.z() * inv)), z1 = int(std::floor(hi.z() * inv));
+    if (std::int64_t(x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1) > 4096) continue;  // far coarser than the grid
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) hash[BlockKey{x, y, z}].push_back(int(i));
   }
 }
 
-void RangePatches::Candidates(const Eigen::Vector3f& x, double radius, std::vector<int>* out) const {
+void RangePatches::Candidates(const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const {
   out->clear();
-  const double r = radius + max_patch_radius;  // cells to visit
-  const float r2 = float(r * r);
   const double inv = 1.0 / cell;
-  const int x0 = int(std::floor((x.x() - r) * inv)), x1 = int(std::floor((x.x() + r) * inv));
-  const int y0 = int(std::floor((x.y() - r) * inv)), y1 = int(std::floor((x.y() + r) * inv));
-  const int z0 = int(std::floor((x.z() - r) * inv)), z1 = int(std::floor((x.z() + r) * inv));
+  const int x0 = int(std::floor((x.x() - radius_m) * inv)), x1 = int(std::floor((x.x() + radius_m) * inv));
+  const int y0 = int(std::floor((x.y() - radius_m) * inv)), y1 = int(std::floor((x.y() + radius_m) * inv));
+  const int z0 = int(std::floor((x.z() - radius_m) * inv)), z1 = int(std::floor((x.z() + radius_m) * inv));
+  const bool single = x0 == x1 && y0 == y1 && z0 == z1;
   for (int k = z0; k <= z1; ++k) {
     for (int j = y0; j <= y1; ++j) {
       for (int i = x0; i <= x1; ++i) {
         const auto it = hash.find(BlockKey{i, j, k});
         if (it == hash.end()) continue;
         for (int p : it->second) {
-          const float d2 = (centroid[p] - x).squaredNorm();
-          if (d2 > r2) continue;
-          const float reach = float(radius) + this->radius[p];
-          if (d2 <= reach * reach) out->push_back(p);
+          const float reach = float(radius_m) + radius[p];
+          if ((centroid[p] - x).squaredNorm() <= reach * reach) out->push_back(p);
         }
       }
     }
+  }
+  if (!single) {  // a patch spanning several visited cells was added once per cell
+    std::sort(out->begin(), out->end());
+    out->erase(std::unique(out->begin(), out->end()), out->end());
   }
 }
 

@@ -42,9 +42,9 @@ struct RangePatches {
   std::vector<Eigen::Vector3f> scanner;     // per scan: scanner position, world minus origin
   double max_patch_radius = 0.0;            // metres: largest centroid-to-vertex distance
 
-  // Indices of patches whose centroid lies within radius + max_patch_radius of x (a superset of the
-  // patches within radius of x). Thread-safe.
-  void Candidates(const Eigen::Vector3f& x, double radius, std::vector<int>* out) const;
+  // Indices of the patches that may lie within radius_m of x (bounding-sphere test), each once.
+  // Patches spanning more than 16^3 hash cells are never returned. Thread-safe.
+  void Candidates(const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const;
   void BuildHash(double cell_m);
 
   std::unordered_map<BlockKey, std::vector<int>, BlockKeyHash> hash;
