@@ -24,8 +24,8 @@ Status RegisterOptions::Validate() const {
   if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
     return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m");
   }
-  if (!(overlap_distance_m > 0 && evaluation_voxel_m > 0)) {
-    return MakeError(ErrorCode::kInvalidArgument, "overlap distance and evaluation voxel must be positive");
+  if (!(overlap_distance_m > 0)) {
+    return MakeError(ErrorCode::kInvalidArgument, "the overlap distance must be positive");
   }
   return Status::Ok();
 }

@@ -47,10 +47,10 @@ struct RegisterOptions {
   LinkThresholds thresholds;
   double range_sigma_m = 0.012;      // scanner range noise; sets the consistency threshold
   double overlap_distance_m = 0.10;  // a child sample within this of the parent surface overlaps
-  double evaluation_voxel_m = 0.10;  // voxel of the overlap / RMS evaluation
   // Loop check (beyond W): each scan is also registered to its best other neighbour; a loop that
   // does not close within these tolerances fails both links (wrong links on repeated façades).
   bool verify_loops = true;
+  bool verify_all_links = false;     // false: only weak links are checked (ok links carry enough evidence)
   int min_check_matches = 20;        // a neighbour needs this many matches to serve as a check
   double loop_tolerance_m = 0.10;
   double loop_tolerance_rad = 0.5 * M_PI / 180.0;

@@ -66,11 +66,17 @@ void Classify(const LinkThresholds& t, io::LinkRecord& link) {
 
 }  // namespace
 
-AlignmentEvidence EvaluateAlignment(const Scan& parent, const Scan& child, const Eigen::Isometry3d& parent_from_child,
-                                    double voxel_m, double max_distance_m) {
+void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
+  prepared->scan = &scan;
+  prepared->confidence = ConfidenceMap(scan, options.reliability);
+  prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
+}
+
+AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
+                                    const Eigen::Isometry3d& parent_from_child, double max_distance_m) {
   AlignmentEvidence e;
-  const std::vector<Eigen::Vector3d> parent_pts = VoxelDownsample(ValidPoints(parent), voxel_m);
-  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(VoxelDownsample(ValidPoints(child), voxel_m), 20000);
+  const std::vector<Eigen::Vector3d>& parent_pts = parent.samples;
+  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.samples, 8000);
   if (parent_pts.size() < 8 || child_pts.empty()) return e;
   const PointIndex index(parent_pts);
   double sum_sq = 0.0;
@@ -96,8 +102,8 @@ AlignmentEvidence EvaluateAlignment(const Scan& parent, const Scan& child, const
   e.overlap = double(overlapping) / double(child_pts.size());
   e.rms_m = overlapping ? std::sqrt(sum_sq / double(overlapping)) : 0.0;
   const double margin = std::max(0.2, 2 * max_distance_m);
-  e.conflict = std::max(FreeSpaceViolations(parent, child, parent_from_child, margin).fraction(),
-                        FreeSpaceViolations(child, parent, parent_from_child.inverse(), margin).fraction());
+  e.conflict = std::max(FreeSpaceViolations(*parent.scan, *child.scan, parent_from_child, margin).fraction(),
+                        FreeSpaceViolations(*child.scan, *parent.scan, parent_from_child.inverse(), margin).fraction());
   return e;
 }
 
@@ -145,14 +151,13 @@ Hypothesis Refine(const PreparedScan& parent, const PreparedScan& child, const s
     }
   } else {
     NullProgress quiet;
-    Expected<IcpResult> icp = DenseIcp(*parent.scan, *child.scan, coarse, options.dense_icp, quiet, cancel);
+    Expected<IcpResult> icp = DenseIcpSamples(parent.samples, child.samples, coarse, options.dense_icp, quiet, cancel);
     if (icp && icp->converged) {
       h.parent_from_child = icp->parent_from_child;
       h.iterations = icp->iterations;
     }
   }
-  h.evidence = EvaluateAlignment(*parent.scan, *child.scan, h.parent_from_child, options.evaluation_voxel_m,
-                                 options.overlap_distance_m);
+  h.evidence = EvaluateAlignment(parent, child, h.parent_from_child, options.overlap_distance_m);
   return h;
 }
 

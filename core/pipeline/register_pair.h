@@ -21,7 +21,11 @@ struct PreparedScan {
   const Scan* scan = nullptr;
   ScanFeatures features;
   std::vector<std::uint8_t> confidence;  // W §2 step 5
+  std::vector<Eigen::Vector3d> samples;  // valid points voxel-downsampled at the dense ICP voxel
 };
+
+// Features are detected by the caller; this fills confidence and samples.
+void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared);
 
 struct PairResult {
   io::LinkRecord link;  // evidence, status, reason, parent_from_child (after fine)
@@ -33,14 +37,14 @@ struct PairResult {
 PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, const std::vector<FeatureMatch>& matches,
                         const RegisterOptions& options, const CancelToken& cancel);
 
-// Overlap and RMS of the child's voxel samples against the parent's, at a pose: the evidence
-// shared by every method.
+// Overlap and RMS (point-to-plane) of the child's samples against the parent's, and free-space
+// conflicts, at a pose: the evidence shared by every method.
 struct AlignmentEvidence {
   double overlap = 0.0;  // fraction of child samples with a parent sample within max_distance_m
   double rms_m = 0.0;    // RMS distance of those samples
   double conflict = 0.0; // free-space violations, the larger of both directions (visibility.h)
 };
-AlignmentEvidence EvaluateAlignment(const Scan& parent, const Scan& child, const Eigen::Isometry3d& parent_from_child,
-                                    double voxel_m, double max_distance_m);
+AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
+                                    const Eigen::Isometry3d& parent_from_child, double max_distance_m);
 
 }  // namespace scanreg::pipeline

@@ -75,9 +75,8 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                    : LoadOrDetectFeatures(scans[i], options.sift, options.feature_cache_dir, &cached);
     if (!f) return MakeError(f.error().code, "scan '" + scans[i].name + "': " + f.error().message);
     result.features_from_cache += cached;
-    prepared[i].scan = &scans[i];
     prepared[i].features = std::move(*f);
-    prepared[i].confidence = ConfidenceMap(scans[i], options.reliability);
+    PrepareScan(scans[i], options, &prepared[i]);
   }
   result.seconds_features = Since(t0);
 
@@ -165,6 +164,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     for (int child : order.order) {
       const int parent = order.parent[child];
       if (parent < 0) continue;
+      if (!options.verify_all_links && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
       int best = -1, best_weight = options.min_check_matches - 1;
       for (int q : order.order) {
         if (q == child || q == parent || order.parent[q] == child) continue;

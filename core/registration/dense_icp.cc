@@ -83,11 +83,22 @@ Expected<IcpResult> DenseIcp(const Scan& parent, const Scan& child, Eigen::Isome
   if (Status s = parent.Validate(); !s) return s.error();
   if (Status s = child.Validate(); !s) return s.error();
   const std::vector<Eigen::Vector3d> target = VoxelDownsample(ValidPoints(parent), options.voxel_m);
-  const std::vector<Eigen::Vector3d> source = ThinEvenly(VoxelDownsample(ValidPoints(child), options.voxel_m),
-                                                         options.max_samples);
+  const std::vector<Eigen::Vector3d> source = VoxelDownsample(ValidPoints(child), options.voxel_m);
   if (target.empty() || source.empty())
     return MakeError(ErrorCode::kInvalidArgument, "dense ICP: scan '" + (target.empty() ? parent.name : child.name) +
                                                       "' has no valid points");
+  return DenseIcpSamples(target, source, initial_parent_from_child, options, progress, cancel);
+}
+
+Expected<IcpResult> DenseIcpSamples(const std::vector<Eigen::Vector3d>& parent_samples,
+                                    const std::vector<Eigen::Vector3d>& child_samples,
+                                    Eigen::Isometry3d initial_parent_from_child, const DenseIcpOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  if (parent_samples.empty() || child_samples.empty())
+    return MakeError(ErrorCode::kInvalidArgument, "dense ICP: a scan has no valid points");
+  const std::vector<Eigen::Vector3d>& target = parent_samples;
+  const std::vector<Eigen::Vector3d> source = ThinEvenly(child_samples, options.max_samples);
   const PointIndex index(target);
   const std::vector<Eigen::Vector3d> normals =
       Normals(target, index, options.normal_neighbours, options.max_surface_variation);
