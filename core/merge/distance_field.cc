@@ -119,9 +119,11 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
     if (d <= band && d < nearest[p.scan].first) nearest[p.scan] = {d, id};
   }
   double sum = 0.0, weight = 0.0;
+  bool projected = false;
   for (std::size_t s = 0; s < nearest.size(); ++s) {
     if (nearest[s].second < 0) continue;
     if (!patches.views[s].empty()) {
+      projected = true;
       // Curless-Levoy: project x into the scan's range image.
       float surface = 0.0f, range = 0.0f;
       if (!patches.views[s].RangeAlong(x, float(band), &surface, &range)) continue;
@@ -148,7 +150,8 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
     weight += w;
   }
   if (weight <= 0.0) {
-    // Every scan sees the nearest patch too obliquely: the distance along the normal of the
+    if (projected) return 0.0f;  // range images say: not near their surface (or occluded)
+    // Scans without angles only, each seeing its nearest patch too obliquely: the distance along the normal of the
     // nearest patch, with a token weight, so that the surface has no hole there.
     float best = std::numeric_limits<float>::max();
     for (const auto& [d, id] : nearest) {

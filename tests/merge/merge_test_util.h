@@ -19,17 +19,19 @@ namespace scanreg::test {
 using RayCast = std::function<std::optional<double>(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir)>;
 
 // A rows x cols window of azimuths/elevations centred on the direction to `target`, spanning
-// half_angle_rad either way; scanner upright (identity rotation) at `eye`; noise sigma along the
+// half_angle_rad either way (half_elevation_rad vertically when given); scanner upright (identity rotation) at `eye`; noise sigma along the
 // line of sight. world_from_scan is set (the scan is registered).
 inline Scan MakeWindowScan(const RayCast& cast, const Eigen::Vector3d& eye, const Eigen::Vector3d& target, int rows,
-                           int cols, double half_angle_rad, double sigma, unsigned seed, const std::string& name) {
+                           int cols, double half_angle_rad, double sigma, unsigned seed, const std::string& name,
+                           double half_elevation_rad = 0.0) {
+  const double half_el = half_elevation_rad > 0.0 ? half_elevation_rad : half_angle_rad;
   Scan scan(name, rows, cols);
   const Eigen::Vector3d d = (target - eye).normalized();
   const double az0 = std::atan2(d.y(), d.x()), el0 = std::atan2(d.z(), std::hypot(d.x(), d.y()));
   scan.angles.azimuth.resize(cols);
   scan.angles.elevation.resize(rows);
   for (int c = 0; c < cols; ++c) scan.angles.azimuth[c] = float(az0 - half_angle_rad + (c + 0.5) * 2 * half_angle_rad / cols);
-  for (int r = 0; r < rows; ++r) scan.angles.elevation[r] = float(el0 + half_angle_rad - (r + 0.5) * 2 * half_angle_rad / rows);
+  for (int r = 0; r < rows; ++r) scan.angles.elevation[r] = float(el0 + half_el - (r + 0.5) * 2 * half_el / rows);
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, sigma);
   for (int r = 0; r < rows; ++r) {
