@@ -14,7 +14,8 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto args = ParseOrHelp(
       "merge", "PROJECT.scanreg.json --out MESH.ply|.obj|.stl [options]   merges the registered scans", argv,
       {{"voxel", true, false, "METRES   voxel size (default 0.02)"},
-       {"method", true, false, "ml|tsdf   maximum-likelihood distance (S, default) or Curless-Levoy TSDF"},
+       {"method", true, false, "ml|tsdf   maximum-likelihood distance (S, default) or Curless-Levoy TSDF (faster)"},
+       {"max-range", true, false, "METRES   leave out returns farther from their scanner (default: all)"},
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
@@ -36,6 +37,9 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto smooth = args->GetInt("smooth", 0, 0, 100);
   if (!smooth) return Fail(smooth.error());
   options.smooth_iterations = *smooth;
+  auto max_range = args->GetDouble("max-range", 0.0, 0.0, 1e6);
+  if (!max_range) return Fail(max_range.error());
+  options.max_range_m = *max_range;
   options.remove_small_pieces = !args->Has("keep-pieces");
   const std::string method = args->Get("method").value_or("ml");
   if (method == "ml") {

@@ -18,6 +18,9 @@ Status MergeOptions::Validate() const {
     return bad("merge: range noise sigma must be > 0 metres, got " + std::to_string(sigma_m));
   }
   if (!(band_m >= 0.0) || !std::isfinite(band_m)) return bad("merge: band must be >= 0 metres");
+  if (!(max_range_m >= 0.0) || !std::isfinite(max_range_m)) {
+    return bad("merge: maximum range (--max-range) must be >= 0 metres (0 = no limit)");
+  }
   if (band_m > 0.0 && band_m < voxel_m) return bad("merge: band must be at least one voxel (or 0 for 3 voxels)");
   if (!(bin_m >= 0.0) || !std::isfinite(bin_m)) return bad("merge: histogram bin must be >= 0 metres");
   if (smooth_iterations < 0 || smooth_iterations > 100) {

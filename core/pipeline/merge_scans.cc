@@ -14,8 +14,20 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
                                                       std::to_string(scans.size()) + " scans");
   }
   std::vector<const Scan*> selected;
+  std::vector<Scan> limited;  // range-limited copies when options.max_range_m is set
+  limited.reserve(scans.size());
   for (std::size_t i = 0; i < scans.size(); ++i) {
-    if (use.empty() || use[i]) selected.push_back(&scans[i]);
+    if (!use.empty() && !use[i]) continue;
+    if (options.max_range_m <= 0.0) {
+      selected.push_back(&scans[i]);
+      continue;
+    }
+    Scan copy = scans[i];
+    const float max2 = static_cast<float>(options.max_range_m * options.max_range_m);
+    for (std::size_t c = 0; c < copy.size(); ++c)
+      if (copy.valid[c] && copy.points[c].squaredNorm() > max2) copy.valid[c] = 0;
+    limited.push_back(std::move(copy));
+    selected.push_back(&limited.back());
   }
   if (selected.empty()) {
     return MakeError(ErrorCode::kInvalidArgument,

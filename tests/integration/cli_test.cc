@@ -176,10 +176,43 @@ TEST(CliTest, RegisterUpdatesTheProjectAndReportsTheFarStation) {
   EXPECT_NE(bad.output.find("--coarse"), std::string::npos);
 }
 
+TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
+  test::TempDir dir;
+  ASSERT_EQ(RunCli("simulate --stations 2 --size 600x150 --out " + Quote(dir / "p")).status, 0);
+  const auto project_file = dir / "p" / "project.scanreg.json";
+  // Nothing registered yet: a clear error, no file.
+  RunResult none = RunCli("merge " + Quote(project_file) + " --method tsdf --out " + Quote(dir / "m.ply"));
+  EXPECT_NE(none.status, 0);
+  EXPECT_NE(none.output.find("register"), std::string::npos) << none.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.ply"));
+  // Register by hand at the true poses, then merge.
+  Expected<io::Project> project = io::LoadProject(project_file);
+  ASSERT_TRUE(project.ok());
+  for (io::ProjectScan& s : project->scans) {
+    s.world_from_scan = *s.reference_world_from_scan;
+    s.registered = true;
+  }
+  ASSERT_TRUE(io::SaveProject(*project, project_file).ok());
+  RunResult merged = RunCli("merge " + Quote(project_file) + " --method tsdf --voxel 0.2 --max-range 15 --out " +
+                            Quote(dir / "m.ply"));
+  ASSERT_EQ(merged.status, 0) << merged.output;
+  std::ifstream in(dir / "m.ply", std::ios::binary);
+  std::string line;
+  long faces = -1;
+  while (std::getline(in, line) && line != "end_header")
+    if (line.rfind("element face ", 0) == 0) faces = std::stol(line.substr(13));
+  EXPECT_GT(faces, 1000) << "a street within 15 m at 20 cm voxels has thousands of triangles";
+  EXPECT_NE(merged.output.find(std::to_string(faces) + " triangles"), std::string::npos) << merged.output;
+  // Nonsense options are refused.
+  EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --voxel 0 --out " + Quote(dir / "x.ply")).status, 2);
+  EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --method magic --out " + Quote(dir / "x.ply")).status, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+}
+
 TEST(CliTest, HelpListsEverySubcommand) {
   RunResult r = RunCli("--help");
   EXPECT_EQ(r.status, 0);
-  for (const char* c : {"demo", "simulate", "register", "new", "info", "export-poses", "convert"})
+  for (const char* c : {"demo", "simulate", "register", "merge", "new", "info", "export-poses", "convert"})
     EXPECT_NE(r.output.find(c), std::string::npos) << c;
 }
 
