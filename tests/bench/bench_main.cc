@@ -1,6 +1,8 @@
 // scanreg-bench: prints a table of speed and memory figures. Not a test: nothing here asserts a
 // time. `--quick` runs reduced sizes.
+#include <algorithm>
 #include <cstdio>
+#include <vector>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -28,21 +30,34 @@ double PeakMemoryMiB() {
 }  // namespace scanreg::bench
 
 int main(int argc, char** argv) {
+  using Section = void (*)(scanreg::bench::Table&, bool);
+  const std::vector<std::pair<std::string, Section>> sections = {
+      {"simulate", scanreg::bench::RunSimulateBench}, {"io", scanreg::bench::RunIoBench},
+      {"register", scanreg::bench::RunRegisterBench}, {"merge", scanreg::bench::RunMergeBench},
+      {"em", scanreg::bench::RunEmBench}};
   bool quick = false;
+  std::vector<std::string> chosen;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
+    } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
+      chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|em ...]\n");
+      return 2;
+    }
+  }
+  for (const std::string& c : chosen) {
+    bool known = false;
+    for (const auto& s : sections) known |= s.first == c;
+    if (!known) {
+      std::fprintf(stderr, "scanreg-bench: unknown section '%s'\n", c.c_str());
       return 2;
     }
   }
   scanreg::bench::Table table;
-  scanreg::bench::RunSimulateBench(table, quick);
-  scanreg::bench::RunIoBench(table, quick);
-  scanreg::bench::RunRegisterBench(table, quick);
-  scanreg::bench::RunMergeBench(table, quick);
-  scanreg::bench::RunEmBench(table, quick);
+  for (const auto& [name, run] : sections)
+    if (chosen.empty() || std::find(chosen.begin(), chosen.end(), name) != chosen.end()) run(table, quick);
   table.Add({"process", "peak resident memory", scanreg::bench::PeakMemoryMiB(), "MiB", ""});
   table.Print();
   return 0;
