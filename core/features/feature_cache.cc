@@ -1,5 +1,7 @@
 #include "core/features/feature_cache.h"
 
+#include "core/common/atomic_file.h"
+
 #include <atomic>
 #include <cstdio>
 #include <cstring>
@@ -157,32 +159,14 @@ std::string Hex(std::uint64_t v) {
   return buf;
 }
 
-// Writes bytes to a unique temporary file in the target's directory and renames it over target.
+// Writes bytes atomically (temp file, fsync, rename); on failure *why says what went wrong.
 bool WriteAtomically(const std::filesystem::path& target, const std::string& bytes, std::string* why) {
-  static std::atomic<unsigned> counter{0};
-  std::ostringstream name;
-  name << target.filename().string() << ".tmp." << ::getpid() << "." << std::hash<std::thread::id>()(std::this_thread::get_id())
-       << "." << counter++;
-  const std::filesystem::path temp = target.parent_path() / name.str();
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      *why = "cannot write " + temp.string();
-      std::error_code ec;
-      std::filesystem::remove(temp, ec);
-      return false;
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, target, ec);
-  if (ec) {
-    *why = "cannot rename " + temp.string() + " to " + target.string() + ": " + ec.message();
-    std::filesystem::remove(temp, ec);
-    return false;
-  }
-  return true;
+  AtomicFile file(target);
+  Status s = file.Open();
+  if (s) s = file.Write(bytes);
+  if (s) s = file.Commit();
+  if (!s) *why = s.error().message;
+  return s.ok();
 }
 
 }  // namespace

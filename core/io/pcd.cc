@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 #include "core/io/organize_default.h"
 
 namespace scanreg::io {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/geometry/transform.h"
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 #include "core/io/organize_default.h"
 #include "core/io/ply_header.h"
 #include "core/io/text_parse.h"

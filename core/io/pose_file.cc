@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/geometry/transform.h"
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::io {

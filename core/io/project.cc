@@ -5,7 +5,7 @@
 #include <set>
 #include <sstream>
 
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 #include "core/geometry/transform.h"
 
 namespace scanreg::io {

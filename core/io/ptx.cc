@@ -4,7 +4,7 @@
 #include <string>
 
 #include "core/geometry/transform.h"
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::io {

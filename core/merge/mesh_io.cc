@@ -7,7 +7,7 @@
 #include <cstring>
 #include <string>
 
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 
 namespace scanreg::merge {
 
@@ -25,7 +25,7 @@ std::string OriginComment(const Eigen::Vector3d& o) {
 }
 
 Status WriteAll(const std::filesystem::path& path, const std::string& bytes) {
-  io::AtomicFile file(path);
+  AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;
   if (Status s = file.Write(bytes); !s) return s;
   return file.Commit();

@@ -1,4 +1,4 @@
-#include "core/io/atomic_file.h"
+#include "core/common/atomic_file.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace scanreg::io {
+namespace scanreg {
 
 namespace {
 constexpr std::size_t kBufferBytes = 4 << 20;
@@ -99,4 +99,4 @@ Status AtomicFile::Commit() {
   return Status::Ok();
 }
 
-}  // namespace scanreg::io
+}  // namespace scanreg

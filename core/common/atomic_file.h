@@ -9,7 +9,7 @@
 
 #include "core/common/expected.h"
 
-namespace scanreg::io {
+namespace scanreg {
 
 class AtomicFile {
  public:
@@ -42,4 +42,4 @@ class AtomicFile {
   std::string buffer_;
 };
 
-}  // namespace scanreg::io
+}  // namespace scanreg
