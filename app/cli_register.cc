@@ -57,6 +57,15 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
     if (!s.registered) std::printf("  %s", s.reason.c_str());
     std::printf("\n");
   }
+  if (!r.global_links.empty()) {
+    std::printf("\nglobal registration (pose graph, Cauchy kernel): link residuals before -> after\n");
+    for (const auto& g : r.global_links) {
+      std::printf("  %-8s %-8s %8.1f mm %8.4f deg  ->  %8.1f mm %8.4f deg  weight %.3f%s\n", g.parent.c_str(),
+                  g.child.c_str(), g.translation_before_m * 1000, g.rotation_before_rad * kDeg,
+                  g.translation_after_m * 1000, g.rotation_after_rad * kDeg, g.weight,
+                  g.down_weighted ? "  DOWN-WEIGHTED" : "");
+    }
+  }
   std::printf("\ntime: features %.1f s (%d from cache), matching %.1f s, pairs %.1f s, total %.1f s\n",
               r.seconds_features, r.features_from_cache, r.seconds_matching, r.seconds_pairs, r.seconds_total);
 }
@@ -144,6 +153,7 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
        {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
+       {"global", false, false, "       global registration: pose graph over every link (all links loop-checked)"},
        {"json", false, false, "       print the result as JSON"}},
       &code);
   if (!args) return code;
@@ -168,6 +178,7 @@ int RunRegister(const std::vector<std::string>& argv) {
   if (!noise) return Fail(noise.error());
   options.range_sigma_m = *noise;
   if (auto root = args->Get("root")) options.root = *root;
+  if (args->Has("global")) options.global = options.verify_all_links = true;
 
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());

@@ -54,6 +54,9 @@ struct RegisterOptions {
   int min_check_matches = 20;        // a neighbour needs this many matches to serve as a check
   double loop_tolerance_m = 0.10;
   double loop_tolerance_rad = 0.5 * M_PI / 180.0;
+  // Global registration (issue 4): a pose graph over every accepted link (tree + loop checks),
+  // Cauchy kernel, root fixed. Off by default until it measures better than the tree.
+  bool global = false;
   std::optional<std::string> root;   // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
   Status Validate() const;

@@ -14,6 +14,7 @@
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
 #include "core/pipeline/register_pair.h"
+#include "core/registration/pose_graph.h"
 #include "core/registration/scan_order.h"
 
 namespace scanreg::pipeline {
@@ -235,6 +236,33 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     io::LinkRecord l = it->second.link;
     l.loop_check = true;
     result.links.push_back(l);
+  }
+  if (options.global) {
+#ifdef SCANREG_HAVE_POSE_GRAPH
+    std::vector<PoseGraphLink> graph;
+    for (const io::LinkRecord& l : result.links) {
+      if (l.status == io::LinkStatus::kFailed) continue;
+      graph.push_back({IndexOf(scans, l.parent), IndexOf(scans, l.child), l.parent_from_child});
+    }
+    std::vector<Eigen::Isometry3d> initial;
+    for (const ScanRegistration& s : result.scans) initial.push_back(s.world_from_scan);
+    PoseGraphOptions graph_options;
+    graph_options.root = result.root;
+    NullProgress quiet;
+    Expected<PoseGraphResult> solved = OptimizePoseGraph(initial, graph, graph_options, quiet, cancel);
+    if (!solved) return solved.error();
+    for (int i = 0; i < n; ++i)
+      if (result.scans[i].registered) result.scans[i].world_from_scan = solved->world_from_scan[i];
+    for (const PoseGraphLinkReport& r : solved->links) {
+      result.global_links.push_back({scans[r.parent].name, scans[r.child].name, r.translation_before_m,
+                                     r.rotation_before_rad, r.translation_after_m, r.rotation_after_rad, r.weight,
+                                     r.down_weighted});
+      if (r.down_weighted) LogWarning("global registration down-weighted link " + scans[r.child].name + " -> " +
+                                      scans[r.parent].name);
+    }
+#else
+    return MakeError(ErrorCode::kUnsupported, "global registration needs Ceres: this scanreg was built without it");
+#endif
   }
   // Failed attempts, and the reason of each scan left out.
   for (const auto& [key, pr] : done) {

@@ -31,6 +31,14 @@ struct ProjectRegistration {
   int root = -1;
   std::vector<ScanRegistration> scans;
   std::vector<io::LinkRecord> links;  // tree links first (in placement order), then failed attempts
+  // Global registration, when run: each accepted link's residual before and after, and its weight.
+  struct GlobalLink {
+    std::string parent, child;
+    double translation_before_m = 0, rotation_before_rad = 0, translation_after_m = 0, rotation_after_rad = 0;
+    double weight = 1.0;
+    bool down_weighted = false;
+  };
+  std::vector<GlobalLink> global_links;
   int features_from_cache = 0;
   double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
 };

@@ -95,6 +95,26 @@ TEST_F(StreetProject, EveryScanRegisteredWithinTwoCentimetresAndATenthOfADegree)
   EXPECT_EQ(tree_links, 5);
 }
 
+TEST_F(StreetProject, GlobalRegistrationKeepsTheAccuracyAndReportsEveryLink) {
+  const std::vector<Scan>& scans = *scans_;
+  RegisterOptions options;
+  options.global = options.verify_all_links = true;
+  Expected<ProjectRegistration> r = Register(scans, options);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  const std::vector<ReferenceError> errors = ReferenceErrors(*r, scans);
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    ASSERT_TRUE(r->scans[i].registered) << scans[i].name;
+    EXPECT_LE(errors[i].position_m, 0.02) << scans[i].name;
+  }
+  int accepted = 0;
+  for (const io::LinkRecord& l : r->links) accepted += l.status != io::LinkStatus::kFailed;
+  ASSERT_EQ(static_cast<int>(r->global_links.size()), accepted);
+  for (const auto& g : r->global_links) {
+    EXPECT_FALSE(g.down_weighted) << g.parent << "-" << g.child << ": no wrong link in this project";
+    EXPECT_LT(g.translation_after_m, 0.02) << g.parent << "-" << g.child;
+  }
+}
+
 TEST(RegisterProjectTest, ParentOverrideChangesTheChain) {
   SimulatedProjectOptions o = StreetOptions(4);
   o.spacing_m = 3.0;  // close stations, so that a scan two stations away is a registrable parent
