@@ -2,7 +2,6 @@
 
 #include "core/common/atomic_file.h"
 
-#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -10,8 +9,6 @@
 #include <sstream>
 #include <string>
 #include <system_error>
-#include <thread>
-#include <unistd.h>
 
 #include "core/common/log.h"
 
