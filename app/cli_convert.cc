@@ -9,7 +9,7 @@ namespace scanreg::cli {
 
 int RunConvert(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .ply, .pcd)", argv, {}, &code);
+  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .e57, .ply, .pcd)", argv, {}, &code);
   if (!args) return code;
   if (args->positional().size() != 2) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: give an input and an output file"));
@@ -36,10 +36,10 @@ const std::vector<Command>& Commands() {
       {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
       {"register", "register every scan of a project automatically (W pipeline)", RunRegister},
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
-      {"new", "create a project from PTX / PLY / PCD scan files", RunNew},
+      {"new", "create a project from PTX / E57 / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
       {"export-poses", "write world_from_scan poses as JSON or CloudCompare 4x4 .txt files", RunExportPoses},
-      {"convert", "convert a scan file between PTX, PLY and PCD", RunConvert},
+      {"convert", "convert a scan file between PTX, E57, PLY and PCD", RunConvert},
   };
   return commands;
 }

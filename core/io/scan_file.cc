@@ -1,5 +1,7 @@
 #include "core/io/scan_file.h"
 
+#include "core/io/e57_reader.h"
+#include "core/io/e57_writer.h"
 #include "core/io/pcd.h"
 #include "core/io/ply.h"
 #include "core/io/ptx.h"
@@ -7,7 +9,7 @@
 
 namespace scanreg::io {
 
-const char* SupportedScanExtensions() { return ".ptx, .ply, .pcd"; }
+const char* SupportedScanExtensions() { return ".ptx, .e57, .ply, .pcd"; }
 
 namespace {
 
@@ -30,12 +32,13 @@ Expected<std::vector<Scan>> One(Expected<Scan> scan) {
 Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, ProgressSink& progress,
                                          const CancelToken& cancel) {
   const std::string ext = LowerExtension(path);
-  if (ext != ".ptx" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
+  if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     return MakeError(ErrorCode::kNotFound, path.string() + ": no such file; check the path");
   }
   if (ext == ".ptx") return ReadPtx(path, progress, cancel);
+  if (ext == ".e57") return ReadE57(path, E57ReadOptions{}, progress, cancel);
   if (ext == ".ply") return One(ReadPly(path, progress, cancel));
   return One(ReadPcd(path, progress, cancel));
 }
@@ -43,12 +46,13 @@ Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, Prog
 Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
                      const CancelToken& cancel) {
   const std::string ext = LowerExtension(path);
-  if (ext != ".ptx" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
+  if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
   if (ext == ".ptx") return WritePtx(path, scans, progress, cancel);
+  if (ext == ".e57") return WriteE57(path, scans, progress, cancel);
   if (scans.size() != 1) {
     return MakeError(ErrorCode::kInvalidArgument, path.string() + ": a " + ext + " file holds one scan, but " +
                                                       std::to_string(scans.size()) +
-                                                      " were given; write a .ptx file or one file per scan");
+                                                      " were given; write a .ptx or .e57 file, or one file per scan");
   }
   if (ext == ".ply") return WritePly(path, scans[0], progress, cancel);
   return WritePcd(path, scans[0], progress, cancel);

@@ -1,4 +1,4 @@
-// Reading and writing scans by file extension: .ptx (several scans), .ply and .pcd (one scan).
+// Reading and writing scans by file extension: .ptx and .e57 (several scans), .ply and .pcd (one scan).
 #pragma once
 
 #include <filesystem>
@@ -18,7 +18,7 @@ Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, Prog
 Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
                      const CancelToken& cancel);
 
-// "Supported: .ptx, .ply, .pcd" — for messages and file dialogs.
+// ".ptx, .e57, .ply, .pcd" — for messages and file dialogs.
 const char* SupportedScanExtensions();
 
 }  // namespace scanreg::io

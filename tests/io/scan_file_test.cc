@@ -38,7 +38,7 @@ TEST(ScanFile, ClearErrors) {
   Expected<std::vector<Scan>> r = ReadScanFile(dir / "scan.las", progress, cancel);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("'.las'"), std::string::npos) << r.error().message;
-  EXPECT_NE(r.error().message.find(".ptx, .ply, .pcd"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(".ptx, .e57, .ply, .pcd"), std::string::npos) << r.error().message;
 
   r = ReadScanFile(dir / "missing.ptx", progress, cancel);
   ASSERT_FALSE(r.ok());
@@ -50,7 +50,7 @@ TEST(ScanFile, ClearErrors) {
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.error().message.find("one scan"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "two.ply"));
-  EXPECT_FALSE(WriteScanFile(dir / "x.e57", {scan}, progress, cancel).ok());
+  EXPECT_FALSE(WriteScanFile(dir / "x.las", {scan}, progress, cancel).ok());
   s = WriteScanFile(dir / "no_such_dir" / "x.ptx", {scan}, progress, cancel);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().code, ErrorCode::kIoError);

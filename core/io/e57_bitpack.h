@@ -1,0 +1,90 @@
+// E57 bytestreams of bit-packed integers (ASTM E2807 §9.7): each value takes a fixed number of
+// bits, least significant bit first, packed back to back across bytes and across data packets.
+// Float streams use the same reader with 32 or 64 bits per value.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace scanreg::io::e57 {
+
+// Number of bits an integer in [minimum, maximum] takes: ceil(log2(maximum - minimum + 1)).
+inline int BitWidth(std::int64_t minimum, std::int64_t maximum) {
+  const std::uint64_t range = static_cast<std::uint64_t>(maximum) - static_cast<std::uint64_t>(minimum);
+  return range == 0 ? 0 : 64 - __builtin_clzll(range);
+}
+
+// Reads a bytestream given as the pieces it has in successive data packets.
+class BitReader {
+ public:
+  void AddSegment(std::string_view bytes) {
+    if (!bytes.empty()) segments_.push_back(bytes);
+  }
+  // The next `bits` (0..64) bits as an unsigned value; false when the stream is exhausted.
+  bool Read(int bits, std::uint64_t* value) {
+    if (bits <= 32) return ReadSmall(bits, value);
+    std::uint64_t low = 0, high = 0;
+    if (!ReadSmall(32, &low) || !ReadSmall(bits - 32, &high)) return false;
+    *value = low | (high << 32);
+    return true;
+  }
+
+ private:
+  bool ReadSmall(int bits, std::uint64_t* value) {
+    while (have_ < bits) {
+      while (segment_ < segments_.size() && offset_ == segments_[segment_].size()) ++segment_, offset_ = 0;
+      if (segment_ == segments_.size()) return false;
+      acc_ |= std::uint64_t(static_cast<unsigned char>(segments_[segment_][offset_++])) << have_;
+      have_ += 8;
+    }
+    *value = bits == 0 ? 0 : acc_ & (~std::uint64_t(0) >> (64 - bits));
+    acc_ = bits == 64 ? 0 : acc_ >> bits;
+    have_ -= bits;
+    return true;
+  }
+
+  std::vector<std::string_view> segments_;
+  std::size_t segment_ = 0, offset_ = 0;
+  std::uint64_t acc_ = 0;
+  int have_ = 0;
+};
+
+// Packs values LSB first; Take() returns the whole bytes written so far (the last partial byte
+// zero-padded when flush is true).
+class BitWriter {
+ public:
+  void Write(std::uint64_t value, int bits) {
+    if (bits > 32) {
+      Write(value & 0xFFFFFFFFu, 32);
+      Write(value >> 32, bits - 32);
+      return;
+    }
+    if (bits == 0) return;
+    acc_ |= (value & (~std::uint64_t(0) >> (64 - bits))) << have_;
+    have_ += bits;
+    while (have_ >= 8) {
+      bytes_.push_back(static_cast<char>(acc_ & 0xFF));
+      acc_ >>= 8;
+      have_ -= 8;
+    }
+  }
+  std::string Take(bool flush) {
+    if (flush && have_ > 0) {
+      bytes_.push_back(static_cast<char>(acc_ & 0xFF));
+      acc_ = 0;
+      have_ = 0;
+    }
+    std::string out;
+    out.swap(bytes_);
+    return out;
+  }
+
+ private:
+  std::string bytes_;
+  std::uint64_t acc_ = 0;
+  int have_ = 0;
+};
+
+}  // namespace scanreg::io::e57

@@ -1,0 +1,289 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "core/io/e57_pages.h"
+#include "core/io/e57_reader.h"
+#include "core/io/e57_writer.h"
+#include "core/io/ptx.h"
+#include "core/io/scan_file.h"
+#include "tests/io/io_test_util.h"
+#include "tests/support/test_paths.h"
+
+namespace scanreg::io {
+namespace {
+
+using test::MakePose;
+using test::MakeRoomScan;
+using test::ReadBytes;
+using test::TempDir;
+using test::WriteBytes;
+
+// The logical bytes of an E57 file (checksums dropped) and back (checksums recomputed), so tests
+// can damage the content behind valid checksums.
+std::string LogicalBytes(const std::string& file) {
+  std::string out;
+  for (std::size_t p = 0; p + e57::kPageSize <= file.size(); p += e57::kPageSize) out.append(file, p, e57::kPageData);
+  return out;
+}
+
+std::string PagedBytes(const std::string& logical) {
+  std::string out;
+  for (std::size_t p = 0; p < logical.size(); p += e57::kPageData) {
+    std::string page = logical.substr(p, e57::kPageData);
+    page.resize(e57::kPageData, '\0');
+    const std::uint32_t crc = e57::Crc32c(page.data(), page.size());
+    for (int i = 0; i < 4; ++i) page.push_back(static_cast<char>((crc >> (24 - 8 * i)) & 0xFF));
+    out += page;
+  }
+  return out;
+}
+
+std::vector<Scan> TwoPosedScans() {
+  Scan a = MakeRoomScan(40, 90, "station A");
+  a.world_from_scan = MakePose(0.7, {0.2, -0.3, 1.0}, {412345.125, 5523456.75, 312.0625});
+  Scan b = MakeRoomScan(25, 60, "station <B> & co");
+  b.world_from_scan = MakePose(-2.9, {0.0, 0.1, 1.0}, {-3.5, 17.25, 0.001});
+  return {a, b};
+}
+
+void ExpectSameScan(const Scan& want, const Scan& got) {
+  EXPECT_EQ(got.name, want.name);
+  ASSERT_EQ(got.rows, want.rows);
+  ASSERT_EQ(got.cols, want.cols);
+  ASSERT_EQ(got.valid, want.valid);
+  float max_err = 0.0f, max_refl_err = 0.0f;
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    if (!want.valid[i]) continue;
+    max_err = std::max(max_err, (want.points[i] - got.points[i]).norm());
+    max_refl_err = std::max(max_refl_err, std::abs(want.reflectance[i] - got.reflectance[i]));
+  }
+  EXPECT_EQ(max_err, 0.0f);  // Float single stores the scan's own floats
+  EXPECT_LE(max_refl_err, 1e-7f);
+  EXPECT_LE((want.world_from_scan.linear() - got.world_from_scan.linear()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((want.world_from_scan.translation() - got.world_from_scan.translation()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_FALSE(got.angles.empty());
+}
+
+TEST(E57, RoundTripKeepsGridPointsReflectanceAndPoses) {
+  TempDir dir;
+  const std::vector<Scan> scans = TwoPosedScans();
+  NullProgress progress;
+  CancelToken cancel;
+  ASSERT_TRUE(WriteE57(dir / "two.e57", scans, progress, cancel).ok());
+  const std::string bytes = ReadBytes(dir / "two.e57");
+  EXPECT_EQ(bytes.substr(0, 8), "ASTM-E57");
+  EXPECT_EQ(bytes.size() % 1024, 0u);
+  Expected<std::vector<Scan>> back = ReadE57(dir / "two.e57", {}, progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  ASSERT_EQ(back->size(), 2u);
+  ExpectSameScan(scans[0], (*back)[0]);
+  ExpectSameScan(scans[1], (*back)[1]);
+  EXPECT_LT(scans[0].CountValid(), scans[0].size());  // the test has empty cells
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);  // no temporary left
+}
+
+TEST(E57, ScanFileDispatchKeepsSeveralScans) {
+  TempDir dir;
+  const std::vector<Scan> scans = TwoPosedScans();
+  NullProgress progress;
+  CancelToken cancel;
+  ASSERT_TRUE(WriteScanFile(dir / "two.E57", scans, progress, cancel).ok());
+  Expected<std::vector<Scan>> back = ReadScanFile(dir / "two.E57", progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  ASSERT_EQ(back->size(), 2u);
+  EXPECT_EQ((*back)[1].CountValid(), scans[1].CountValid());
+}
+
+TEST(E57, ListsScansAndReadsChosenOnes) {
+  TempDir dir;
+  const std::vector<Scan> scans = TwoPosedScans();
+  NullProgress progress;
+  CancelToken cancel;
+  ASSERT_TRUE(WriteE57(dir / "two.e57", scans, progress, cancel).ok());
+  Expected<std::vector<E57ScanInfo>> list = ListE57Scans(dir / "two.e57");
+  ASSERT_TRUE(list.ok()) << list.error().ToString();
+  ASSERT_EQ(list->size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ((*list)[i].name, scans[i].name);
+    EXPECT_EQ((*list)[i].points, scans[i].CountValid());
+    EXPECT_EQ((*list)[i].rows, scans[i].rows);
+    EXPECT_EQ((*list)[i].cols, scans[i].cols);
+    EXPECT_TRUE((*list)[i].has_intensity);
+    EXPECT_TRUE((*list)[i].has_pose);
+  }
+  E57ReadOptions by_name;
+  by_name.names = {"station <B> & co"};
+  Expected<std::vector<Scan>> b = ReadE57(dir / "two.e57", by_name, progress, cancel);
+  ASSERT_TRUE(b.ok()) << b.error().ToString();
+  ASSERT_EQ(b->size(), 1u);
+  ExpectSameScan(scans[1], (*b)[0]);
+  E57ReadOptions by_index;
+  by_index.indices = {0};
+  Expected<std::vector<Scan>> a = ReadE57(dir / "two.e57", by_index, progress, cancel);
+  ASSERT_TRUE(a.ok()) << a.error().ToString();
+  ASSERT_EQ(a->size(), 1u);
+  EXPECT_EQ((*a)[0].name, "station A");
+
+  by_name.names = {"station C"};
+  Expected<std::vector<Scan>> none = ReadE57(dir / "two.e57", by_name, progress, cancel);
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(none.error().message.find("'station C'"), std::string::npos) << none.error().message;
+  by_index.indices = {2};
+  EXPECT_FALSE(ReadE57(dir / "two.e57", by_index, progress, cancel).ok());
+}
+
+TEST(E57, CancelStopsReadingAndWriting) {
+  TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const Scan scan = MakeRoomScan(40, 90);
+  ASSERT_TRUE(WriteE57(dir / "a.e57", {scan}, progress, cancel).ok());
+  cancel.Cancel();
+  Expected<std::vector<Scan>> r = ReadE57(dir / "a.e57", {}, progress, cancel);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::kCancelled);
+  Status w = WriteE57(dir / "b.e57", {scan}, progress, cancel);
+  ASSERT_FALSE(w.ok());
+  EXPECT_EQ(w.error().code, ErrorCode::kCancelled);
+  EXPECT_FALSE(std::filesystem::exists(dir / "b.e57"));
+}
+
+TEST(E57, RealPumpScanMatchesItsPtxPointForPoint) {
+  SCANREG_REQUIRE_REALDATA(data);
+  const auto e57_path = data / "e57_pumpA_tls/pumpAVisualReferenceImage.e57";
+  Expected<std::vector<E57ScanInfo>> list = ListE57Scans(e57_path);
+  ASSERT_TRUE(list.ok()) << list.error().ToString();
+  ASSERT_EQ(list->size(), 1u);
+  EXPECT_EQ((*list)[0].name, "pumpA");
+  EXPECT_EQ((*list)[0].points, 155201u);
+  EXPECT_EQ((*list)[0].rows, 1074);
+  EXPECT_EQ((*list)[0].cols, 345);
+  EXPECT_TRUE((*list)[0].has_intensity);
+  EXPECT_FALSE((*list)[0].has_pose);
+
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> e57 = ReadE57(e57_path, {}, progress, cancel);
+  ASSERT_TRUE(e57.ok()) << e57.error().ToString();
+  Expected<std::vector<Scan>> ptx = ReadPtx(data / "e57_pumpA_tls/pumpA.ptx", progress, cancel);
+  ASSERT_TRUE(ptx.ok()) << ptx.error().ToString();
+  ASSERT_EQ(e57->size(), 1u);
+  const Scan& got = (*e57)[0];
+  const Scan& want = (*ptx)[0];
+  EXPECT_EQ(got.name, "pumpA");
+  ASSERT_EQ(got.rows, 1074);
+  ASSERT_EQ(got.cols, 345);
+  EXPECT_EQ(got.CountValid(), 155201u);
+  ASSERT_EQ(got.valid, want.valid);
+  EXPECT_TRUE(got.world_from_scan.matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-15));
+  double max_err = 0.0, max_refl_err = 0.0;
+  float refl_min = 1.0f, refl_max = 0.0f;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    if (!got.valid[i]) continue;
+    max_err = std::max(max_err, double((got.points[i] - want.points[i]).norm()));
+    max_refl_err = std::max(max_refl_err, double(std::abs(got.reflectance[i] - want.reflectance[i])));
+    refl_min = std::min(refl_min, got.reflectance[i]), refl_max = std::max(refl_max, got.reflectance[i]);
+  }
+  EXPECT_LE(max_err, 1e-6);       // 1e-6 m ScaledInteger steps, PTX written from the same integers
+  EXPECT_LE(max_refl_err, 1e-5);  // intensity 0..32767 scaled to [0, 1] by intensityLimits
+  EXPECT_GE(refl_min, 0.38f);
+  EXPECT_LE(refl_max, 0.70f);
+  EXPECT_FALSE(got.angles.empty());
+}
+
+// Writes a small scan and returns its file's bytes.
+std::string SmallFile(const TempDir& dir) {
+  NullProgress progress;
+  CancelToken cancel;
+  Scan scan = MakeRoomScan(12, 20, "small");
+  scan.world_from_scan = MakePose(0.3, {0, 0, 1}, {1, 2, 3});
+  EXPECT_TRUE(WriteE57(dir / "small.e57", {scan}, progress, cancel).ok());
+  return ReadBytes(dir / "small.e57");
+}
+
+// Reads bytes written to a file; returns the error message, or "" when the read succeeded.
+std::string ReadError(const TempDir& dir, const std::string& bytes) {
+  WriteBytes(dir / "bad.e57", bytes);
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> r = ReadE57(dir / "bad.e57", {}, progress, cancel);
+  if (r.ok()) {
+    for (const Scan& s : *r) EXPECT_TRUE(s.Validate().ok());
+    return "";
+  }
+  EXPECT_NE(r.error().message.find("bad.e57"), std::string::npos) << r.error().message;
+  return r.error().message;
+}
+
+// Replaces `from` with the same-length `to` in the file's XML, checksums recomputed.
+std::string EditXml(const std::string& file, const std::string& from, const std::string& to) {
+  EXPECT_EQ(from.size(), to.size());
+  std::string logical = LogicalBytes(file);
+  const std::size_t at = logical.rfind(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) logical.replace(at, from.size(), to);
+  return PagedBytes(logical);
+}
+
+bool Has(const std::string& message, const std::string& part) { return message.find(part) != std::string::npos; }
+
+TEST(E57, MalformedFilesGiveClearErrors) {
+  TempDir dir;
+  const std::string good = SmallFile(dir);
+  ASSERT_EQ(ReadError(dir, good), "");
+  EXPECT_EQ(ReadError(dir, PagedBytes(LogicalBytes(good))), "");  // the test's re-paging is faithful
+
+  std::string flipped = good;
+  flipped[1024 + 100] ^= 0x10;
+  EXPECT_TRUE(Has(ReadError(dir, flipped), "page 1 (physical offset 1024")) << ReadError(dir, flipped);
+  EXPECT_TRUE(Has(ReadError(dir, flipped), "CRC-32C"));
+  EXPECT_TRUE(Has(ReadError(dir, good.substr(0, good.size() - 1024)), "truncated"));
+  EXPECT_TRUE(Has(ReadError(dir, good.substr(0, good.size() - 100)), "truncated"));
+  EXPECT_TRUE(Has(ReadError(dir, good.substr(0, 500)), "truncated"));
+  EXPECT_TRUE(Has(ReadError(dir, "PLY not e57" + std::string(2000, ' ')), "not an E57 file"));
+
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(EditXml(good, "<data3D ", "<dataXX "), "</data3D>", "</dataXX>")),
+                  "no data3D element"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "\"CompressedVector\"", "\"CompressedVectoR\"")),
+                  "'points' is not a CompressedVector"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "</e57Root>", "</e57RooX>")), "not valid XML"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "maximum=\"11\"", "maximum=\"-1\"")), "is larger than maximum"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "precision=\"single\"", "precision=\"singlE\"")), "precision"));
+  const std::string count = "recordCount=\"" + std::to_string(MakeRoomScan(12, 20).CountValid()) + "\"";
+  std::string more = count;
+  more[more.size() - 2] = '9', more[more.size() - 3] = '9';
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, count, more)), "recordCount")) << ReadError(dir, EditXml(good, count, more));
+
+  // A NaN coordinate: the first cartesianX of the first data packet (section header 32 bytes,
+  // packet header 6 + 6 * 2 bytes, after the 48-byte file header).
+  std::string logical = LogicalBytes(good);
+  const float nan = std::nanf("");
+  std::memcpy(&logical[48 + 32 + 18], &nan, 4);
+  EXPECT_TRUE(Has(ReadError(dir, PagedBytes(logical)), "NaN")) << ReadError(dir, PagedBytes(logical));
+}
+
+TEST(E57, DamagedBytesNeverCrash) {
+  TempDir dir;
+  const std::string good = SmallFile(dir);
+  const std::string logical = LogicalBytes(good);
+  std::mt19937 rng(7);
+  int errors = 0, reads = 0;
+  for (int k = 0; k < 300; ++k) {  // flip bytes behind valid checksums: exercises every parser
+    std::string damaged = logical;
+    const int flips = 1 + k % 3;
+    for (int f = 0; f < flips; ++f) damaged[rng() % damaged.size()] ^= static_cast<char>(1 + rng() % 255);
+    (ReadError(dir, PagedBytes(damaged)).empty() ? reads : errors)++;
+  }
+  for (std::size_t cut = 0; cut < good.size(); cut += 97) {
+    EXPECT_FALSE(ReadError(dir, good.substr(0, cut)).empty()) << "cut at " << cut;
+  }
+  EXPECT_GT(errors, 0);
+  EXPECT_EQ(errors + reads, 300);
+}
+
+}  // namespace
+}  // namespace scanreg::io
