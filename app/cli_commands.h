@@ -23,6 +23,8 @@ int RunExportPoses(const std::vector<std::string>& args);
 int RunConvert(const std::vector<std::string>& args);
 int RunRegister(const std::vector<std::string>& args);
 int RunMerge(const std::vector<std::string>& args);
+int RunReport(const std::vector<std::string>& args);
+int RunExportClouds(const std::vector<std::string>& args);
 
 const std::vector<Command>& Commands();
 

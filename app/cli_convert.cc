@@ -38,7 +38,9 @@ const std::vector<Command>& Commands() {
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
       {"new", "create a project from PTX / E57 / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
-      {"export-poses", "write world_from_scan poses as JSON or CloudCompare 4x4 .txt files", RunExportPoses},
+      {"report", "write the registration report: HTML page with the confusion matrix, network, links, poses, errors", RunReport},
+      {"export-poses", "write world_from_scan poses as JSON, CloudCompare 4x4 .txt files or a CSV of positions and angles", RunExportPoses},
+      {"export-clouds", "write the registered scans as PTX / E57 / PLY, poses kept in the header or applied", RunExportClouds},
       {"convert", "convert a scan file between PTX, E57, PLY and PCD", RunConvert},
   };
   return commands;

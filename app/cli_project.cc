@@ -5,6 +5,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
 #include "core/geometry/transform.h"
+#include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
@@ -76,26 +77,38 @@ int RunInfo(const std::vector<std::string>& argv) {
 
 int RunExportPoses(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("export-poses", "PROJECT.scanreg.json --format json|txt --out PATH", argv,
-                          {{"format", true, false, "json|txt   json: one file; txt: one CloudCompare 4x4 file per scan"},
-                           {"out", true, false, "PATH     output file (json) or folder (txt)"}},
-                          &code);
+  auto args = ParseOrHelp(
+      "export-poses", "PROJECT.scanreg.json --format json|txt|csv --out PATH", argv,
+      {{"format", true, false,
+        "json|txt|csv   json: one file of row-major 4x4 world_from_scan; txt: one CloudCompare 4x4 file per scan;\n"
+        "                     csv: scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg (scanner position in the world;\n"
+        "                     R = Rz(heading) Ry(pitch) Rx(roll), heading counter-clockwise from world +x)"},
+       {"out", true, false, "PATH     output file (json, csv) or folder (txt)"}},
+      &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: give exactly one project file"));
   }
   const std::string format = args->Get("format").value_or("json");
   const auto out = args->Get("out");
-  if (format != "json" && format != "txt") {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: --format must be json or txt, not '" + format + "'"));
+  if (format != "json" && format != "txt" && format != "csv") {
+    return Fail(
+        MakeError(ErrorCode::kInvalidArgument, "export-poses: --format must be json, txt or csv, not '" + format + "'"));
   }
   if (!out) return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: --out PATH is required"));
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
-  if (format == "json") {
+  int unregistered = 0;
+  for (const io::ProjectScan& s : project->scans) unregistered += !s.registered;
+  if (unregistered > 0) {
+    std::printf("note: %d of %zu scans are not registered; their poses are the initial ones\n", unregistered,
+                project->scans.size());
+  }
+  if (format == "json" || format == "csv") {
     std::vector<io::NamedPose> poses;
     for (const io::ProjectScan& s : project->scans) poses.push_back({s.name, s.world_from_scan});
-    if (Status s = io::WritePosesJson(*out, poses); !s) return Fail(s.error());
+    Status written = format == "json" ? io::WritePosesJson(*out, poses) : io::WritePosesCsv(*out, poses);
+    if (!written) return Fail(written.error());
     std::printf("wrote %zu poses to %s\n", poses.size(), out->c_str());
     return 0;
   }

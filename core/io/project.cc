@@ -95,6 +95,22 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
   return l;
 }
 
+// Rows of non-negative integers, scans x scans.
+Expected<Eigen::MatrixXi> ConfusionFromJson(const json& j, std::size_t scans, const std::string& where) {
+  const std::string bad = where + ": 'confusion' must be " + std::to_string(scans) + " rows of " +
+                          std::to_string(scans) + " non-negative integers (one per scan); delete it and register again";
+  if (!j.is_array() || j.size() != scans) return MakeError(ErrorCode::kParseError, bad);
+  Eigen::MatrixXi c(scans, scans);
+  for (std::size_t i = 0; i < scans; ++i) {
+    if (!j[i].is_array() || j[i].size() != scans) return MakeError(ErrorCode::kParseError, bad);
+    for (std::size_t k = 0; k < scans; ++k) {
+      if (!j[i][k].is_number_integer() || j[i][k].get<long long>() < 0) return MakeError(ErrorCode::kParseError, bad);
+      c(i, k) = j[i][k].get<int>();
+    }
+  }
+  return c;
+}
+
 }  // namespace
 
 const char* LinkStatusName(LinkStatus status) {
@@ -165,6 +181,12 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
         scan.reference_world_from_scan = *t;
       }
       if (s.contains("parent_override")) scan.parent_override = s["parent_override"].get<std::string>();
+      if (s.contains("coarse_world_from_scan")) {
+        auto t = PoseFromJson(s["coarse_world_from_scan"], label + " coarse_world_from_scan");
+        if (!t) return t.error();
+        scan.coarse_world_from_scan = *t;
+      }
+      scan.unregistered_reason = s.value("unregistered_reason", "");
       project.scans.push_back(std::move(scan));
     }
     for (const ProjectScan& scan : project.scans) {
@@ -181,6 +203,11 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
         if (!link) return link.error();
         project.links.push_back(std::move(*link));
       }
+    }
+    if (j.contains("confusion")) {
+      auto confusion = ConfusionFromJson(j["confusion"], project.scans.size(), where);
+      if (!confusion) return confusion.error();
+      project.confusion = std::move(*confusion);
     }
     if (j.contains("settings")) {
       for (auto it = j["settings"].begin(); it != j["settings"].end(); ++it)
@@ -206,6 +233,8 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
             {"world_from_scan", PoseToJson(s.world_from_scan)}};
     if (s.reference_world_from_scan) js["reference_world_from_scan"] = PoseToJson(*s.reference_world_from_scan);
     if (s.parent_override) js["parent_override"] = *s.parent_override;
+    if (s.coarse_world_from_scan) js["coarse_world_from_scan"] = PoseToJson(*s.coarse_world_from_scan);
+    if (!s.unregistered_reason.empty()) js["unregistered_reason"] = s.unregistered_reason;
     scans.push_back(std::move(js));
   }
   json links = json::array();
@@ -216,6 +245,15 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
          {"links", std::move(links)},
          {"settings", project.settings}};
   j["root"] = project.root ? json(*project.root) : json(nullptr);
+  if (project.confusion.size() > 0) {
+    json rows = json::array();
+    for (int i = 0; i < project.confusion.rows(); ++i) {
+      json row = json::array();
+      for (int k = 0; k < project.confusion.cols(); ++k) row.push_back(project.confusion(i, k));
+      rows.push_back(std::move(row));
+    }
+    j["confusion"] = std::move(rows);
+  }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;
   if (Status s = file.Write(j.dump(2) + "\n"); !s) return s;

@@ -48,6 +48,10 @@ struct ProjectScan {
   bool registered = false;          // world_from_scan is a registration result (or the root)
   std::optional<Eigen::Isometry3d> reference_world_from_scan;
   std::optional<std::string> parent_override;  // scan-order override: register to this scan
+  // From the last registration (optional in the file): the pose after the coarse step only
+  // (W fig. 6 "after coarse") and why the scan could not be registered.
+  std::optional<Eigen::Isometry3d> coarse_world_from_scan;
+  std::string unregistered_reason;
 };
 
 struct Project {
@@ -58,6 +62,9 @@ struct Project {
   std::vector<LinkRecord> links;
   std::optional<std::string> root;                // root scan of the scan order
   std::map<std::string, std::string> settings;    // option name -> value, as the user set them
+  // Confusion matrix C(i, j) of the last registration (W §2 step 3), in scan order; empty when the
+  // project has not been registered. Optional in the file; must be scans x scans when present.
+  Eigen::MatrixXi confusion;
 
   // Index of the scan with this name, or -1.
   int FindScan(const std::string& name) const;

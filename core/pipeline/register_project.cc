@@ -289,7 +289,11 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
     io::ProjectScan& ps = project.scans[i];
     ps.registered = result.scans[i].registered;
     if (ps.registered) ps.world_from_scan = result.scans[i].world_from_scan;
+    ps.unregistered_reason = ps.registered ? "" : result.scans[i].reason;
+    ps.coarse_world_from_scan.reset();
+    if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;
   }
+  project.confusion = result.confusion;
   // Keep the user's accept / reject decisions on links that were recomputed.
   std::vector<io::LinkRecord> links = result.links;
   for (io::LinkRecord& l : links) {
@@ -345,6 +349,27 @@ std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, c
     }
   }
   return errors;
+}
+
+std::vector<ReferenceError> ReferenceErrors(const io::Project& project) {
+  // The saved result as the registration returned it; the scans need only their reference poses.
+  ProjectRegistration result;
+  result.root = project.root ? project.FindScan(*project.root) : -1;
+  std::vector<Scan> scans(project.scans.size());
+  for (std::size_t i = 0; i < project.scans.size(); ++i) {
+    const io::ProjectScan& ps = project.scans[i];
+    scans[i].name = ps.name;
+    scans[i].reference_world_from_scan = ps.reference_world_from_scan;
+    ScanRegistration s;
+    s.name = ps.name;
+    s.registered = ps.registered;
+    s.world_from_scan = ps.world_from_scan;
+    s.has_coarse = ps.coarse_world_from_scan.has_value() || static_cast<int>(i) == result.root;
+    s.coarse_world_from_scan = ps.coarse_world_from_scan.value_or(ps.world_from_scan);
+    result.scans.push_back(s);
+  }
+  if (result.root < 0 || !project.scans[result.root].registered) return std::vector<ReferenceError>(scans.size());
+  return ReferenceErrors(result, scans);
 }
 
 }  // namespace scanreg::pipeline

@@ -69,5 +69,7 @@ struct ReferenceError {
   double coarse_position_m = 0, coarse_angle_rad = 0;   // after coarse
 };
 std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans);
+// The same for a saved project (its poses, coarse poses and reference poses); none without a root.
+std::vector<ReferenceError> ReferenceErrors(const io::Project& project);
 
 }  // namespace scanreg::pipeline
