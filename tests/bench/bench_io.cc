@@ -1,4 +1,4 @@
-// IO section: PTX write/read throughput of a W-sized (3000 x 750) scan, with PCL's ASCII PCD and
+// IO section: PTX and E57 write/read throughput of a W-sized (3000 x 750) scan, with PCL's ASCII PCD and
 // PLY readers on the same points as the baseline, and our PLY reader on PCL's ASCII PLY.
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <string>
 
+#include "core/io/e57_reader.h"
+#include "core/io/e57_writer.h"
 #include "core/io/ply.h"
 #include "core/io/ptx.h"
 #include "tests/bench/bench_table.h"
@@ -65,6 +67,24 @@ void RunIoBench(Table& table, bool quick) {
                Millions(cells, "lines") + ", " + std::to_string(int(read_s * 1e3)) + " ms incl. angles"});
     table.Add({"io", "PTX read " + size + " (scanreg)", ptx_mib / read_s, "MiB/s", ""});
   }
+  back = MakeError(ErrorCode::kFailed, "freed");
+
+  // Ours: E57 (valid cells only; Float single xyz + intensity, bit-packed row/column indices).
+  const auto e57 = dir / "bench.e57";
+  written = Status::Ok();
+  const double e57_write_s = Seconds([&] { written = io::WriteE57(e57, {scan}, progress, cancel); });
+  const double e57_read_s = Seconds([&] { back = io::ReadE57(e57, {}, progress, cancel); });
+  const bool e57_ok = written && back && back->size() == 1 && (*back)[0].CountValid() == scan.CountValid();
+  const double e57_mib = written ? MiB(e57) : 0.0;
+  char e57_note[96];
+  std::snprintf(e57_note, sizeof(e57_note), "%.1f MiB = %.0f%% of the PTX, incl. fsync", e57_mib,
+                100.0 * e57_mib / ptx_mib);
+  table.Add({"io", "E57 write " + size + " (scanreg)", written ? cells / e57_write_s / 1e6 : 0.0, "M points/s",
+             written ? e57_note : "failed: " + written.error().ToString()});
+  table.Add({"io", "E57 read " + size + " (scanreg)", e57_ok ? cells / e57_read_s / 1e6 : 0.0, "M points/s",
+             e57_ok ? std::to_string(int(e57_read_s * 1e3)) + " ms incl. CRC-32C and angles"
+                    : "failed: " + (back ? std::string("wrong content") : back.error().ToString())});
+  table.Add({"io", "E57 read " + size + " (scanreg)", e57_ok ? e57_mib / e57_read_s : 0.0, "MiB/s", ""});
   back = MakeError(ErrorCode::kFailed, "freed");
 
   // Baseline: the valid points as ASCII PCD and ASCII PLY, read by PCL.

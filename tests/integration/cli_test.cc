@@ -1,4 +1,4 @@
-// Runs scanreg-cli end to end: simulate, new, info, export-poses, convert, and bad input.
+// Runs scanreg-cli end to end: simulate, new, info, export-poses, convert (also through E57), and bad input.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -115,6 +115,53 @@ TEST(CliTest, NewInfoExportAndConvertWorkTogether) {
   ASSERT_EQ((*ply)[0].cols, (*ptx)[0].cols);
   EXPECT_EQ((*ply)[0].CountValid(), (*ptx)[0].CountValid());
   EXPECT_TRUE((*ply)[0].valid == (*ptx)[0].valid);
+}
+
+TEST(CliTest, ConvertThroughE57KeepsScansGridAndPosesAndFeedsANewProject) {
+  test::TempDir dir;
+  ASSERT_EQ(RunCli("simulate --stations 2 --size 300x80 --out " + Quote(dir / "sim")).status, 0);
+  CancelToken cancel;
+  NullProgress progress;
+  auto a = io::ReadScanFile(dir / "sim" / "s01.ptx", progress, cancel);
+  auto b = io::ReadScanFile(dir / "sim" / "s02.ptx", progress, cancel);
+  ASSERT_TRUE(a.ok() && b.ok());
+  std::vector<Scan> scans = {(*a)[0], (*b)[0]};
+  scans[1].world_from_scan.linear() = Eigen::AngleAxisd(0.8, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()).toRotationMatrix();
+  scans[1].world_from_scan.translation() << 523456.125, 4.25, -1.5;
+  ASSERT_TRUE(io::WriteScanFile(dir / "both.ptx", scans, progress, cancel).ok());
+
+  RunResult to_e57 = RunCli("convert " + Quote(dir / "both.ptx") + " " + Quote(dir / "both.e57"));
+  ASSERT_EQ(to_e57.status, 0) << to_e57.output;
+  EXPECT_NE(to_e57.output.find("converted 2 scan(s)"), std::string::npos) << to_e57.output;
+  RunResult to_ptx = RunCli("convert " + Quote(dir / "both.e57") + " " + Quote(dir / "back.ptx"));
+  ASSERT_EQ(to_ptx.status, 0) << to_ptx.output;
+  auto back = io::ReadScanFile(dir / "back.ptx", progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  ASSERT_EQ(back->size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const Scan& want = scans[k];
+    const Scan& got = (*back)[k];
+    ASSERT_EQ(got.rows, want.rows);
+    ASSERT_EQ(got.cols, want.cols);
+    ASSERT_TRUE(got.valid == want.valid);
+    float max_err = 0.0f;
+    for (std::size_t i = 0; i < want.size(); ++i)
+      if (want.valid[i]) max_err = std::max(max_err, (got.points[i] - want.points[i]).norm());
+    EXPECT_EQ(max_err, 0.0f) << "E57 stores the scan's floats";
+    EXPECT_LE((got.world_from_scan.matrix() - want.world_from_scan.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+  }
+
+  RunResult created = RunCli("new " + Quote(dir / "e57.scanreg.json") + " " + Quote(dir / "both.e57"));
+  ASSERT_EQ(created.status, 0) << created.output;
+  Expected<io::Project> project = io::LoadProject(dir / "e57.scanreg.json");
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  ASSERT_EQ(project->scans.size(), 2u);
+  EXPECT_EQ(project->scans[1].index_in_file, 1);
+  EXPECT_LE((project->scans[1].world_from_scan.matrix() - scans[1].world_from_scan.matrix()).cwiseAbs().maxCoeff(),
+            1e-9);
+  RunResult info = RunCli("info " + Quote(dir / "e57.scanreg.json"));
+  ASSERT_EQ(info.status, 0) << info.output;
+  EXPECT_NE(info.output.find("300x80"), std::string::npos) << info.output;
 }
 
 TEST(CliTest, BadInputGivesOneClearLineAndNonZeroExit) {
