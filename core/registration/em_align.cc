@@ -13,6 +13,7 @@ namespace {
 
 struct Pair {
   Eigen::Vector3d s;  // sample, child frame
+  Eigen::Vector3d x;  // the child vertex it was sampled from
   Eigen::Vector3d y;  // correspondence, parent frame
   double w = 0;
   bool ok = false;
@@ -62,11 +63,16 @@ Eigen::Isometry3d SmallMotion(const Eigen::Matrix<double, 6, 1>& x) {
 
 const char* EmMethodName(EmOptions::Method method) {
   switch (method) {
-    case EmOptions::Method::kEm: return "EM (S)";
+    case EmOptions::Method::kEm: return "EM";
     case EmOptions::Method::kProjectiveIcp: return "projective ICP [15]";
     case EmOptions::Method::kPointToPlane: return "point-to-plane ICP";
   }
   return "?";
+}
+
+std::string EmMethodName(const EmOptions& options) {
+  if (options.method != EmOptions::Method::kEm) return EmMethodName(options.method);
+  return options.residual == EmOptions::Residual::kPointToPoint ? "EM (S, point-to-point)" : "EM (point-to-plane)";
 }
 
 Status EmOptions::Validate() const {
@@ -128,7 +134,8 @@ Expected<EmResult> AlignEm(const RangeImageProjection& parent, const RangeImageP
   const Scan& cs = child.scan();
   const Scan& ps = parent.scan();
   const bool em = options.method == EmOptions::Method::kEm;
-  const bool plane = options.method == EmOptions::Method::kPointToPlane;
+  const bool plane = options.method == EmOptions::Method::kPointToPlane ||
+                     (em && options.residual == EmOptions::Residual::kPointToPlane);
 
   // Sample offsets (metres) and their weights.
   std::vector<double> offsets{0.0}, weights{1.0};
@@ -183,6 +190,7 @@ Expected<EmResult> AlignEm(const RangeImageProjection& parent, const RangeImageP
         Pair& p = pairs[static_cast<std::size_t>(i) * m + j];
         p.ok = false;
         p.s = x[i] + offsets[j] * v[i];
+        p.x = x[i];
         const Eigen::Vector3d sp = pose * p.s;
         double row = 0, col = 0;
         if (!parent.Project(sp, &row, &col) || !parent.SurfaceAlongLineOfSight(sp, &p.y)) continue;
@@ -215,11 +223,12 @@ Expected<EmResult> AlignEm(const RangeImageProjection& parent, const RangeImageP
             for (int j = 0; j < m; ++j) pairs[static_cast<std::size_t>(i) * m + j].ok = false;
       }
     }
-    std::vector<Eigen::Vector3d> src, dst, nrm;
+    std::vector<Eigen::Vector3d> src, dst, nrm, vtx;
     std::vector<double> w;
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       if (!pairs[k].ok) continue;
       src.push_back(pairs[k].s);
+      vtx.push_back(pairs[k].x);
       dst.push_back(pairs[k].y);
       w.push_back(pairs[k].w);
       if (plane) nrm.push_back(pair_normal[k]);
@@ -239,7 +248,7 @@ Expected<EmResult> AlignEm(const RangeImageProjection& parent, const RangeImageP
       Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
       Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
       for (std::size_t k = 0; k < src.size(); ++k) {
-        const Eigen::Vector3d p = pose * src[k];
+        const Eigen::Vector3d p = pose * vtx[k];
         Eigen::Matrix<double, 6, 1> jac;
         jac << p.cross(nrm[k]), nrm[k];
         const double r = (p - dst[k]).dot(nrm[k]);
@@ -260,8 +269,7 @@ Expected<EmResult> AlignEm(const RangeImageProjection& parent, const RangeImageP
     // RMS at the updated pose over the E-step's pairs.
     double sum = 0, wsum = 0;
     for (std::size_t k = 0; k < src.size(); ++k) {
-      const Eigen::Vector3d d = pose * src[k] - dst[k];
-      sum += w[k] * (plane ? std::pow(d.dot(nrm[k]), 2) : d.squaredNorm());
+      sum += w[k] * (plane ? std::pow((pose * vtx[k] - dst[k]).dot(nrm[k]), 2) : (pose * src[k] - dst[k]).squaredNorm());
       wsum += w[k];
     }
     result.rms_m = wsum > 0 ? std::sqrt(sum / wsum) : 0.0;

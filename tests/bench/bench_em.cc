@@ -44,7 +44,24 @@ namespace {
 constexpr double kDeg = 180.0 / M_PI;
 const char* kSection = "em";
 using Method = EmOptions::Method;
-const Method kMethods[] = {Method::kEm, Method::kProjectiveIcp, Method::kPointToPlane};
+using Residual = EmOptions::Residual;
+// The methods compared: EM with our point-to-plane M-step (the default), S's EM as published
+// (point-to-point, eq. 14), projective ICP [15] and projective point-to-plane ICP.
+struct Variant {
+  Method method;
+  Residual residual;
+};
+const Variant kMethods[] = {{Method::kEm, Residual::kPointToPlane},
+                            {Method::kEm, Residual::kPointToPoint},
+                            {Method::kProjectiveIcp, Residual::kPointToPlane},
+                            {Method::kPointToPlane, Residual::kPointToPlane}};
+constexpr int kVariants = 4;
+
+EmOptions WithVariant(EmOptions o, int k) {
+  o.method = kMethods[k].method;
+  o.residual = kMethods[k].residual;
+  return o;
+}
 
 std::string Fmt(const char* f, double v) {
   char buf[64];
@@ -70,7 +87,7 @@ void TwoPlaneTable(Table& table, bool quick, bool about_x) {
     int failed = 0;
     double seconds = 0;
   };
-  std::map<Method, Acc> acc;
+  std::map<int, Acc> acc;
   std::mt19937 rng(2024);
   std::uniform_int_distribution<int> pick(0, 9);
   std::uniform_real_distribution<double> off(-0.25, 0.25);
@@ -84,9 +101,8 @@ void TwoPlaneTable(Table& table, bool quick, bool about_x) {
     Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
     offset.translation() = Eigen::Vector3d(off(rng), off(rng), off(rng));
     const Eigen::Isometry3d initial = b.world_from_scan.inverse() * offset * a.world_from_scan;
-    for (Method m : kMethods) {
-      EmOptions o;
-      o.method = m;
+    for (int m = 0; m < kVariants; ++m) {
+      EmOptions o = WithVariant(EmOptions(), m);
       o.sigma_m = sigma;
       o.max_iterations = 100;
       Acc& ac = acc[m];
@@ -118,9 +134,10 @@ void TwoPlaneTable(Table& table, bool quick, bool about_x) {
   const std::map<Method, std::vector<double>> paper_v = {{Method::kEm, {0.051, 0.0025, 0.121, 5.81}},
                                                           {Method::kProjectiveIcp, {0.080, 0.0063, 0.146, 7.29}}};
   const std::string size = std::to_string(trials) + " trials";
-  for (Method m : kMethods) {
-    const Acc& ac = acc[m];
-    const std::string name = std::string(about_x ? "2-plane B " : "2-plane A ") + EmMethodName(m);
+  for (int k = 0; k < kVariants; ++k) {
+    const Acc& ac = acc[k];
+    const Method m = kMethods[k].method;
+    const std::string name = std::string(about_x ? "2-plane B " : "2-plane A ") + EmMethodName(WithVariant(EmOptions(), k));
     auto note = [&](int k, const char* f) {
       std::string s = size + ", " + std::to_string(ac.failed) + " failed";
       if (paper_v.count(m)) s += "; " + paper.at(m) + Fmt(f, paper_v.at(m)[k]);
@@ -182,9 +199,8 @@ std::vector<BunnyScan> LoadBunny(std::string* why) {
   return out;
 }
 
-EmOptions BunnyOptions(Method m) {
-  EmOptions o;
-  o.method = m;
+EmOptions BunnyOptions(int variant) {
+  EmOptions o = WithVariant(EmOptions(), variant);
   o.sigma_m = 0.0005;  // Cyberware range noise, ~0.5 mm (assumed; S's sigma is the user's)
   o.subsample = 4;
   o.max_iterations = 100;
@@ -226,7 +242,7 @@ void BunnyPairs(Table& table, bool quick, const std::vector<BunnyScan>& scans,
   const int starts = quick ? 1 : 3;
   NullProgress progress;
   CancelToken cancel;
-  for (Method m : kMethods) {
+  for (int m = 0; m < kVariants; ++m) {
     std::mt19937 rng(7);
     int ok = 0, total = 0;
     std::vector<double> pos, ang;
@@ -251,7 +267,7 @@ void BunnyPairs(Table& table, bool quick, const std::vector<BunnyScan>& scans,
     }
     std::sort(pos.begin(), pos.end());
     std::sort(ang.begin(), ang.end());
-    const std::string name = std::string("bunny pairs ") + EmMethodName(m);
+    const std::string name = std::string("bunny pairs ") + EmMethodName(BunnyOptions(m));
     const std::string base = std::to_string(pairs.size()) + " overlapping pairs x " + std::to_string(starts) + " starts (5 deg, 5 mm)";
     table.Add({kSection, name + " success", total ? 100.0 * ok / total : 0.0, "%", base + "; success: < 2 mm at the centroid and < 0.5 deg"});
     if (!pos.empty()) {
@@ -272,7 +288,7 @@ void BunnyRing(Table& table, const std::vector<BunnyScan>& scans, const std::vec
   if (idx.size() != ring.size()) return;
   NullProgress progress;
   CancelToken cancel;
-  for (Method m : kMethods) {
+  for (int m = 0; m < kVariants; ++m) {
     std::mt19937 rng(11);
     Eigen::Isometry3d world_from_prev = scans[idx[0]].world_from_scan;
     bool failed = false;
@@ -290,7 +306,7 @@ void BunnyRing(Table& table, const std::vector<BunnyScan>& scans, const std::vec
       }
       world_from_prev = world_from_prev * r->parent_from_child;
     }
-    const std::string name = std::string("bunny ring loop gap ") + EmMethodName(m);
+    const std::string name = std::string("bunny ring loop gap ") + EmMethodName(BunnyOptions(m));
     if (failed) {
       table.Add({kSection, name, 0.0, "", "a link failed"});
       continue;
@@ -317,7 +333,7 @@ void RunEmBench(Table& table, bool quick) {
   }
   std::vector<RangeImageProjection> proj;
   for (const BunnyScan& b : scans) {
-    Expected<RangeImageProjection> p = RangeImageProjection::Create(b.scan, EmMeshOptions(BunnyOptions(Method::kEm)));
+    Expected<RangeImageProjection> p = RangeImageProjection::Create(b.scan, EmMeshOptions(BunnyOptions(0)));
     if (!p) {
       table.Add({kSection, "bunny pairs / ring", 0.0, "", "skipped: " + p.error().ToString()});
       return;

@@ -108,8 +108,11 @@ TEST(AlignEm, NoiseFreePyramid) {
 }
 
 // Noisy pyramid (sigma 0.01 along the lines of sight), offsets along the parent's viewing axis:
-// EM at least as good as projective ICP (mean over trials), both within a few sigma.
-TEST(AlignEm, NoisyPyramidEmAsGoodAsProjectiveIcp) {
+// S's EM (point-to-point) at least as good as projective ICP [15], and EM with the point-to-plane
+// M-step at least as good as point-to-plane ICP (mean over trials), all within a few sigma.
+// (Measured: S's EM ~ projective ICP ~3 mm; the point-to-plane pair ~16 mm, their normals from
+// 5 x 5 windows of sigma-0.01 noise at 0.025 spacing are noisy.)
+TEST(AlignEm, NoisyPyramidEmAsGoodAsItsSingleSampleBaseline) {
   RidgeModel model;
   model.slope_y = 0.4;
   const double sigma = 0.01;
@@ -117,7 +120,8 @@ TEST(AlignEm, NoisyPyramidEmAsGoodAsProjectiveIcp) {
   std::uniform_real_distribution<double> u(-0.08, 0.08);
   NullProgress progress;
   CancelToken cancel;
-  std::map<Method, double> mean_err;
+  enum { kEmS, kIcp, kEmPlane, kIcpPlane };
+  double mean_err[4] = {0, 0, 0, 0};
   const int trials = 6;
   for (int t = 0; t < trials; ++t) {
     const Scan parent = CastRidgeScan(model, RidgeViewPose(model, -15.0), sigma, rng);
@@ -127,27 +131,30 @@ TEST(AlignEm, NoisyPyramidEmAsGoodAsProjectiveIcp) {
     const Eigen::Isometry3d initial = parent.world_from_scan.inverse() *
                                       Perturb(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), 0.0, u(rng) * axis) *
                                       child.world_from_scan;
-    for (Method m : {Method::kEm, Method::kProjectiveIcp}) {
+    for (int k = 0; k < 4; ++k) {
       EmOptions o;
-      o.method = m;
+      o.method = k == kEmS || k == kEmPlane ? Method::kEm : k == kIcp ? Method::kProjectiveIcp : Method::kPointToPlane;
+      o.residual = k == kEmS ? EmOptions::Residual::kPointToPoint : EmOptions::Residual::kPointToPlane;
       o.sigma_m = sigma;
       o.max_iterations = 100;
       auto r = AlignEm(parent, child, initial, o, progress, cancel);
       ASSERT_TRUE(r.ok()) << r.error().ToString();
-      mean_err[m] += ComparePoses(r->parent_from_child, truth).position_m / trials;
+      mean_err[k] += ComparePoses(r->parent_from_child, truth).position_m / trials;
     }
   }
-  std::printf("mean position error: EM %.2f mm, projective ICP %.2f mm\n", mean_err[Method::kEm] * 1e3,
-              mean_err[Method::kProjectiveIcp] * 1e3);
-  EXPECT_LT(mean_err[Method::kEm], 3 * sigma);
-  EXPECT_LE(mean_err[Method::kEm], 1.1 * mean_err[Method::kProjectiveIcp] + 1e-3);
+  std::printf("mean position error: EM (S) %.2f mm, projective ICP %.2f mm, EM (point-to-plane) %.2f mm, "
+              "point-to-plane ICP %.2f mm\n", mean_err[kEmS] * 1e3, mean_err[kIcp] * 1e3, mean_err[kEmPlane] * 1e3,
+              mean_err[kIcpPlane] * 1e3);
+  EXPECT_LT(mean_err[kEmS], 3 * sigma);
+  EXPECT_LE(mean_err[kEmS], 1.1 * mean_err[kIcp] + 1e-3);
+  EXPECT_LT(mean_err[kEmPlane], 3 * sigma);
+  EXPECT_LE(mean_err[kEmPlane], 1.1 * mean_err[kIcpPlane] + 1e-3);
 }
 
-// Panoramic scans of a room (lines of sight in every direction), noise along the rays: EM and
-// projective ICP both recover a translated pose; EM at least as well. (Rotations about the
-// parent's centre are not tested: with correspondences on the parent's lines of sight every
-// residual y - s points through that centre, so the M-step sees no torque about it; measured,
-// a 1 deg turn about the vertical stays ~1 deg for both. Point-to-plane corrects it.)
+// Panoramic scans of a room (lines of sight in every direction), noise along the rays: EM (its
+// default point-to-plane M-step) and point-to-plane ICP recover a translated pose; EM at least as
+// well as projective ICP. (With point-to-point residuals on the parent's lines of sight every
+// residual y - s points through the parent's centre, so that M-step sees no torque about it.)
 TEST(AlignEm, PanoramicRoomWithRangeNoise) {
   const double sigma = 0.01;
   Eigen::Isometry3d pa = Eigen::Isometry3d::Identity(), pb = Eigen::Isometry3d::Identity();
@@ -253,9 +260,10 @@ EmOptions BunnyOptions(Method m) {
 }
 
 // bun045 -> bun000. From the bun.conf pose every method stays put (the poses agree with the
-// data). From 5 deg / 5 mm off, point-to-plane converges back; EM and projective ICP do not
-// correct the rotation (measured ~4.6 deg left): the Cyberware grids fit a camera whose rays are
-// nearly parallel, and residuals along the parent's rays carry no lateral or torque signal.
+// data). From 5 deg / 5 mm off, point-to-plane ICP and EM with its point-to-plane M-step (the
+// default) converge back; S's EM as published (point-to-point, eq. 14) and projective ICP stall
+// (measured ~3 deg / 5 mm left): the Cyberware grids fit a camera whose rays are nearly parallel,
+// and residuals along the parent's rays carry no lateral or torque signal.
 TEST(AlignEm, StanfordBunnyPair) {
   SCANREG_REQUIRE_REALDATA(data);
   auto pair = LoadBunnyPair(data, "bun000", "bun045");
@@ -264,23 +272,33 @@ TEST(AlignEm, StanfordBunnyPair) {
   CancelToken cancel;
   const Eigen::Vector3d c = pair->centroid;
   Eigen::Isometry3d perturbed = pair->truth * Perturb(c, Eigen::Vector3d(0.3, 1.0, -0.5), 5.0, Eigen::Vector3d(0.003, -0.003, 0.0025));
-  for (Method m : {Method::kEm, Method::kProjectiveIcp, Method::kPointToPlane}) {
+  const std::pair<Method, EmOptions::Residual> variants[] = {{Method::kEm, EmOptions::Residual::kPointToPlane},
+                                                             {Method::kEm, EmOptions::Residual::kPointToPoint},
+                                                             {Method::kProjectiveIcp, EmOptions::Residual::kPointToPlane},
+                                                             {Method::kPointToPlane, EmOptions::Residual::kPointToPlane}};
+  for (const auto& [m, residual] : variants) {
+    EmOptions o = BunnyOptions(m);
+    o.residual = residual;
+    const std::string name = EmMethodName(o);
+    const bool lateral = m == Method::kPointToPlane || (m == Method::kEm && residual == EmOptions::Residual::kPointToPlane);
     for (const Eigen::Isometry3d& start : {pair->truth, perturbed}) {
-      auto r = AlignEm(pair->parent, pair->child, start, BunnyOptions(m), progress, cancel);
+      auto r = AlignEm(pair->parent, pair->child, start, o, progress, cancel);
       ASSERT_TRUE(r.ok()) << r.error().ToString();
       const double e_pos = (r->parent_from_child * c - pair->truth * c).norm();
       const double e_ang = Eigen::AngleAxisd(r->parent_from_child.linear() * pair->truth.linear().transpose()).angle();
       const bool from_truth = start.isApprox(pair->truth);
-      std::printf("%-20s from %s: %3d it, error %.3f mm %.3f deg, rms %.3f mm, %d pairs, overlap %.2f, cameras %s %.2f px / %s %.2f px\n",
-                  EmMethodName(m), from_truth ? "bun.conf " : "5deg/5mm", r->iterations, e_pos * 1e3, e_ang * 180 / M_PI,
+      std::printf("%-24s from %s: %3d it, error %.3f mm %.3f deg, rms %.3f mm, %d pairs, overlap %.2f, cameras %s %.2f px / %s %.2f px\n",
+                  name.c_str(), from_truth ? "bun.conf " : "5deg/5mm", r->iterations, e_pos * 1e3, e_ang * 180 / M_PI,
                   r->rms_m * 1e3, r->correspondences, r->overlap, GridCameraModelName(r->parent_camera.model),
                   r->parent_camera.rms_px, GridCameraModelName(r->child_camera.model), r->child_camera.rms_px);
       if (from_truth) {
-        EXPECT_LT(e_pos, 0.0002) << EmMethodName(m);
-        EXPECT_LT(e_ang, 0.1 * M_PI / 180) << EmMethodName(m);
-      } else if (m == Method::kPointToPlane) {
-        EXPECT_LT(e_pos, 0.001);
-        EXPECT_LT(e_ang, 0.3 * M_PI / 180);
+        EXPECT_LT(e_pos, 0.0002) << name;
+        EXPECT_LT(e_ang, 0.1 * M_PI / 180) << name;
+      } else if (lateral) {
+        EXPECT_LT(e_pos, 0.001) << name;
+        EXPECT_LT(e_ang, 0.3 * M_PI / 180) << name;
+      } else {
+        EXPECT_GT(e_ang, 1.0 * M_PI / 180) << name << ": the stall this test documents is gone; update the EM default";
       }
     }
   }
