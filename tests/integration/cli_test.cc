@@ -10,36 +10,16 @@
 #include "core/io/pose_file.h"
 #include "core/io/project.h"
 #include "core/io/scan_file.h"
+#include "tests/integration/cli_run.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg {
 namespace {
 
-struct RunResult {
-  int status = -1;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunCli(const std::string& args) {
-  RunResult r;
-  const std::string cmd = std::string(SCANREG_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int st = pclose(pipe);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-std::string ReadAll(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string Quote(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+using test::Quote;
+using test::ReadAll;
+using test::RunCli;
+using test::RunResult;
 
 TEST(CliTest, SimulateIsDeterministicAndWritesReferencePoses) {
   test::TempDir dir;

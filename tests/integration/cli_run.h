@@ -1,0 +1,42 @@
+// Running the real scanreg-cli binary (SCANREG_CLI, set by CMake) as a user would, for the
+// integration tests.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace scanreg::test {
+
+struct RunResult {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+inline RunResult RunCli(const std::string& args) {
+  RunResult r;
+  const std::string cmd = std::string(SCANREG_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int st = pclose(pipe);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+inline std::string ReadAll(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+inline std::string Quote(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+}  // namespace scanreg::test
