@@ -306,6 +306,44 @@ TEST(E57, ScanWithoutGridIsOrganizedAndIntensityUsesItsLimits) {
   EXPECT_GE(kept, n * 9 / 10);  // organizing by density keeps most points in a cell of their own
 }
 
+TEST(E57, ReadsScaledIntegersAndInvalidState) {
+  TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  Scan scan = MakeRoomScan(20, 40, "room");
+  for (std::size_t i = 0; i < scan.size(); ++i) scan.reflectance[i] = (i % 3 == 0) ? 2.0f : 0.0f;
+  ASSERT_TRUE(WriteE57(dir / "a.e57", {scan}, progress, cancel).ok());
+  // Read the 32 bits of each cartesianX float as a ScaledInteger (raw = minimum + bits), and the
+  // intensity stream as cartesianInvalidState (0 valid, 2 no coordinates).
+  std::string bytes = EditXml(ReadBytes(dir / "a.e57"), "<cartesianX type=\"Float\" precision=\"single\"",
+                              "<cartesianX type=\"ScaledInteger\" minimum=\"-5\" maximum=\"4294967290\" "
+                              "scale=\"0.5\" offset=\"3\"");
+  bytes = EditXml(bytes, "<intensity ", "<cartesianInvalidState ");
+  WriteBytes(dir / "b.e57", bytes);
+  Expected<std::vector<Scan>> back = ReadE57(dir / "b.e57", {}, progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  const Scan& got = (*back)[0];
+  std::size_t valid = 0;
+  double max_rel_err = 0.0;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const bool want_valid = scan.valid[i] && scan.reflectance[i] == 0.0f;
+    ASSERT_EQ(got.valid[i] != 0, want_valid) << "cell " << i;
+    if (!want_valid) continue;
+    ++valid;
+    std::uint32_t bits;
+    std::memcpy(&bits, &scan.points[i].x(), 4);
+    const double want_x = (double(bits) - 5.0) * 0.5 + 3.0;
+    // x ~ 1e9 m is far from the origin: the reader moves a whole-metre shift into the pose.
+    const Eigen::Vector3d world = got.world_from_scan * got.points[i].cast<double>();
+    max_rel_err = std::max(max_rel_err, std::abs(world.x() - want_x) / want_x);
+    EXPECT_NEAR(world.y(), scan.points[i].y(), 1e-6);
+    EXPECT_EQ(got.reflectance[i], 0.5f);  // no intensity field left
+  }
+  EXPECT_GT(valid, scan.CountValid() / 2);
+  EXPECT_GT(got.world_from_scan.translation().norm(), 1e8);
+  EXPECT_LE(max_rel_err, 3e-7);  // a few float ulps: the points stay float, ~1e9 here
+}
+
 TEST(E57, MalformedFilesGiveClearErrors) {
   TempDir dir;
   const std::string good = SmallFile(dir);
