@@ -17,11 +17,13 @@
 #include <QVTKOpenGLNativeWidget.h>
 
 #include "core/common/log.h"
+#include "core/pipeline/apply_pair_result.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "ui/job_runner.h"
 #include "ui/network_panel.h"
+#include "ui/pair_inspector.h"
 #include "ui/project_panels.h"
 #include "ui/scan_cloud_actors.h"
 #include "ui/view_3d.h"
@@ -92,6 +94,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   });
   connect(jobs_, &JobRunner::Succeeded, this, &MainWindow::OnJobSucceeded);
   connect(jobs_, &JobRunner::Failed, this, &MainWindow::OnJobFailed);
+  inspector_ = new PairInspector(this);  // after the window's own job connections
 
   // Core log messages arrive on any thread: forward them queued to the log panel.
   // The handler is removed in the destructor (under the log's mutex) before the panel dies, and a
@@ -217,8 +220,7 @@ bool MainWindow::OpenDemoProject(const QString& dir) {
 
 bool MainWindow::RegisterProject() {
   if (project_.scans.empty()) return false;
-  pipeline::RegisterOptions options;
-  options.feature_cache_dir = project_.file.parent_path() / ".scanreg-cache";
+  const pipeline::RegisterOptions options = RegistrationOptions();
   return jobs_->Start(tr("Registering"), [project = project_, scans = scans_, options](
                                              ProgressSink& progress, const CancelToken& cancel) mutable {
     Expected<pipeline::ProjectRegistration> r =
@@ -267,6 +269,25 @@ void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bo
                               : accept ? tr("accept %1 → %2").arg(child, parent)
                                        : tr("clear the decision on %1 → %2").arg(child, parent);
   undo_->push(new EditCommand(this, text, project_, std::move(after), reject));
+}
+
+pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
+  pipeline::RegisterOptions options;
+  options.feature_cache_dir = project_.file.parent_path() / ".scanreg-cache";
+  return options;
+}
+
+bool MainWindow::UsePairResult(const io::LinkRecord& link) {
+  io::Project after = project_;
+  if (Status s = pipeline::ApplyPairResult(link, after); !s) {
+    ShowError(tr("Cannot use this pair registration"), QString::fromStdString(s.error().message));
+    return false;
+  }
+  const QString text = tr("use the pair registration %1 → %2 (%3)")
+                           .arg(QString::fromStdString(link.child), QString::fromStdString(link.parent),
+                                QString::fromStdString(link.method));
+  undo_->push(new EditCommand(this, text, project_, std::move(after), false));
+  return true;
 }
 
 void MainWindow::ApplyEdit(const io::Project& project, bool rerun) {
@@ -324,6 +345,7 @@ void MainWindow::Refresh() {
                                     colour_by_reflectance_ ? CloudColouring::kReflectance : CloudColouring::kPerScan,
                                     150000));
   setWindowTitle(tr("scanreg — %1").arg(QString::fromStdString(project_.file.filename().string())));
+  emit ProjectChanged();
 }
 
 void MainWindow::ShowError(const QString& title, const QString& message) {

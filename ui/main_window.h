@@ -10,6 +10,7 @@
 
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
+#include "core/pipeline/register_options.h"
 
 class QAction;
 class QProgressBar;
@@ -22,6 +23,7 @@ class ConfusionPanel;
 class JobRunner;
 class LogPanel;
 class NetworkPanel;
+class PairInspector;
 class ScanListPanel;
 class View3d;
 
@@ -37,6 +39,13 @@ class MainWindow : public QMainWindow {
   bool OpenDemoProject(const QString& dir);  // simulates a small street project into dir
   bool RegisterProject();
   bool SaveProject(const QString& path);  // synchronous, atomic
+  // The options of the project's registration (also the pair panel's starting point).
+  pipeline::RegisterOptions RegistrationOptions() const;
+  // Applies a pair registration (the pair panel's "Use this result") as an undoable edit; false,
+  // with a dialog naming the scans, when it cannot be applied.
+  bool UsePairResult(const io::LinkRecord& link);
+  // Redraws the panels and the 3D view from the project.
+  void Refresh();
 
   // The user's edits, undoable. A parent override re-runs the registration when no job runs.
   void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
@@ -53,10 +62,14 @@ class MainWindow : public QMainWindow {
   ScanListPanel* scanList() const { return scan_list_; }
   ConfusionPanel* confusionPanel() const { return confusion_panel_; }
   NetworkPanel* networkPanel() const { return network_; }
+  PairInspector* pairInspector() const { return inspector_; }
   bool dirty() const { return dirty_; }
 
   // Renders the window (including the VTK view) into a PNG; returns false on failure.
   bool SaveScreenshot(const QString& path);
+
+ signals:
+  void ProjectChanged();  // the panels were redrawn from the project (emitted by Refresh)
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -67,7 +80,6 @@ class MainWindow : public QMainWindow {
   void OnJobSucceeded(const QString& title, std::any result);
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   void SetBusy(bool busy);
-  void Refresh();
   void ShowError(const QString& title, const QString& message);
   void ShowAbout();
 
@@ -83,6 +95,7 @@ class MainWindow : public QMainWindow {
   ConfusionPanel* confusion_panel_ = nullptr;
   LogPanel* log_ = nullptr;
   NetworkPanel* network_ = nullptr;
+  PairInspector* inspector_ = nullptr;
   QUndoStack* undo_ = nullptr;
   QProgressBar* progress_ = nullptr;
   QPushButton* cancel_ = nullptr;

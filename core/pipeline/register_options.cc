@@ -5,6 +5,16 @@ namespace scanreg::pipeline {
 const char* FineMethodName(FineMethod method) { return method == FineMethod::kDense ? "dense" : "keypoints"; }
 const char* CoarseMethodName(CoarseMethod method) { return method == CoarseMethod::kEpnp ? "epnp" : "3d"; }
 
+const std::vector<FineMethod>& AllFineMethods() {
+  static const std::vector<FineMethod> all = {FineMethod::kDense, FineMethod::kKeypoints};
+  return all;
+}
+
+const std::vector<CoarseMethod>& AllCoarseMethods() {
+  static const std::vector<CoarseMethod> all = {CoarseMethod::k3d, CoarseMethod::kEpnp};
+  return all;
+}
+
 Status LinkThresholds::Validate() const {
   if (min_inliers < 3 || weak_inliers < min_inliers || !(min_overlap >= 0 && min_overlap <= weak_overlap &&
                                                          weak_overlap <= 1) ||

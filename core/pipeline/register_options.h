@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/common/expected.h"
 #include "core/features/matching.h"
@@ -21,6 +22,9 @@ enum class FineMethod {
 };
 const char* FineMethodName(FineMethod method);
 const char* CoarseMethodName(CoarseMethod method);
+// Every method, in the order the GUI lists them (add new methods here too).
+const std::vector<FineMethod>& AllFineMethods();
+const std::vector<CoarseMethod>& AllCoarseMethods();
 
 // When a link is ok, weak or failed. A failed link is not chained; a weak one is chained but
 // reported (the user may accept or reject it).

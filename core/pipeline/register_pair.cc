@@ -9,6 +9,7 @@
 #include "core/geometry/transform.h"
 #include "core/registration/consistency.h"
 #include "core/registration/point_index.h"
+#include "core/registration/surface_distance.h"
 #include "core/registration/visibility.h"
 #include "core/registration/voxel_filter.h"
 
@@ -78,25 +79,15 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   const std::vector<Eigen::Vector3d>& parent_pts = parent.samples;
   const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.samples, 8000);
   if (parent_pts.size() < 8 || child_pts.empty()) return e;
-  const PointIndex index(parent_pts);
+  std::vector<Eigen::Vector3d> queries;
+  queries.reserve(child_pts.size());
+  for (const Eigen::Vector3d& c : child_pts) queries.push_back(parent_from_child * c);
+  const std::vector<double> d = PointToSurfaceDistances(PointIndex(parent_pts), parent_pts, queries, max_distance_m);
   double sum_sq = 0.0;
   long overlapping = 0;
-#pragma omp parallel for reduction(+ : sum_sq, overlapping) schedule(static)
-  for (long i = 0; i < static_cast<long>(child_pts.size()); ++i) {
-    const Eigen::Vector3d q = parent_from_child * child_pts[i];
-    if (index.Nearest(q, max_distance_m) < 0) continue;
-    // Point-to-plane distance to the parent's local surface (PCA of the 8 nearest samples), so that
-    // the figure measures misalignment, not the sampling distance.
-    const std::vector<int> nn = index.KNearest(q, 8);
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int k : nn) mean += parent_pts[k];
-    mean /= double(nn.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int k : nn) cov += (parent_pts[k] - mean) * (parent_pts[k] - mean).transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    const double d = std::abs((q - mean).dot(eig.eigenvectors().col(0)));
-    if (d > max_distance_m) continue;
-    sum_sq += d * d;
+  for (double di : d) {
+    if (di < 0) continue;
+    sum_sq += di * di;
     ++overlapping;
   }
   e.overlap = double(overlapping) / double(child_pts.size());
@@ -186,6 +177,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   std::vector<Correspondence3d> corr;
   corr.reserve(matches.size());
   std::vector<double> ranges;
+  std::vector<int> match_of_corr;  // corr[k] comes from matches[match_of_corr[k]]
   for (const FeatureMatch& m : matches) {
     const Keypoint& kp = parent.features.keypoints[m.query];
     const Keypoint& kc = child.features.keypoints[m.train];
@@ -194,6 +186,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     if (!p || !c) continue;
     corr.push_back({p->cast<double>(), c->cast<double>()});
     ranges.push_back(c->norm());
+    match_of_corr.push_back(static_cast<int>(&m - matches.data()));
   }
   link.reliable = static_cast<int>(corr.size());
   if (corr.empty()) return fail("no reliable correspondence: the scans share no matched features");
@@ -212,6 +205,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.iterations = coarse->iterations;
   result.coarse_parent_from_child = coarse->parent_from_child;
   result.coarse_ok = !coarse->ambiguous;
+  for (int k : coarse->inlier_indices) result.coarse_inlier_matches.push_back(match_of_corr[k]);
 
   // Fine registration of the best hypothesis and of its distinct competitor (repeated façades):
   // the surfaces, not the feature counts, decide between them (beyond W).

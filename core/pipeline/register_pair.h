@@ -31,6 +31,7 @@ struct PairResult {
   io::LinkRecord link;  // evidence, status, reason, parent_from_child (after fine)
   Eigen::Isometry3d coarse_parent_from_child = Eigen::Isometry3d::Identity();
   bool coarse_ok = false;
+  std::vector<int> coarse_inlier_matches;  // indices into `matches` of the coarse RANSAC inliers, ascending
 };
 
 // matches: parent's descriptors (query) matched in the child (train).

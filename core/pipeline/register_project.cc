@@ -30,6 +30,8 @@ int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
   return -1;
 }
 
+}  // namespace
+
 // The matches of a pair in both directions (parent's features as query), without duplicates:
 // the ratio test is asymmetric, so the union holds more true correspondences than either side.
 std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child) {
@@ -45,8 +47,6 @@ std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int chil
   }
   return out;
 }
-
-}  // namespace
 
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                             const std::vector<std::optional<std::string>>& parent_override,

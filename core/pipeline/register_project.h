@@ -10,6 +10,7 @@
 
 #include "core/common/expected.h"
 #include "core/common/progress.h"
+#include "core/features/confusion.h"
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
@@ -42,6 +43,10 @@ struct ProjectRegistration {
   int features_from_cache = 0;
   double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
 };
+
+// The matches of a pair in both directions (parent's features as query), without duplicates:
+// the ratio test is asymmetric, so the union holds more true correspondences than either side.
+std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child);
 
 // scans: with their current world_from_scan (the root keeps its own); parent_override by scan
 // name (empty optional = automatic); rejected: (parent, child) links the user rejected.

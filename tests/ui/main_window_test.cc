@@ -11,6 +11,7 @@
 #include <QtTest/QtTest>
 
 #include "core/io/project.h"
+#include "tests/ui/wait_for_job.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/network_panel.h"
@@ -18,22 +19,8 @@
 #include "ui/view_3d.h"
 
 using scanreg::ui::JobRunner;
+using scanreg::test::WaitForJob;
 using scanreg::ui::MainWindow;
-
-namespace {
-
-// Waits for the running job; returns true when it succeeded.
-bool WaitForJob(MainWindow& window, int timeout_ms, bool* cancelled = nullptr) {
-  QSignalSpy ok(window.jobs(), &JobRunner::Succeeded);
-  QSignalSpy failed(window.jobs(), &JobRunner::Failed);
-  QElapsedTimer timer;
-  timer.start();
-  while (ok.isEmpty() && failed.isEmpty() && timer.elapsed() < timeout_ms) QTest::qWait(50);
-  if (!failed.isEmpty() && cancelled) *cancelled = failed.first().at(2).toBool();
-  return !ok.isEmpty();
-}
-
-}  // namespace
 
 class MainWindowTest : public QObject {
   Q_OBJECT

@@ -1,0 +1,276 @@
+#include "ui/pair_inspector.h"
+
+#include <QDockWidget>
+#include <QEvent>
+#include <QGraphicsItem>
+#include <QHeaderView>
+#include <QMouseEvent>
+#include <QTimer>
+#include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
+
+#include "core/features/feature_cache.h"
+#include "core/features/panorama.h"
+#include "ui/distance_overlay.h"
+#include "ui/job_runner.h"
+#include "ui/main_window.h"
+#include "ui/network_panel.h"
+#include "ui/pair_panel.h"
+#include "ui/project_panels.h"
+#include "ui/view_3d.h"
+
+namespace scanreg::ui {
+namespace {
+
+constexpr double kOverlayScaleMax_m = 0.05;  // distance drawn red in the 3D preview
+
+struct PairJobResult {
+  PanoramaImage parent, child;
+  pipeline::PairInspection inspection;
+};
+
+Expected<ScanFeatures> Features(const Scan& scan, const pipeline::RegisterOptions& options) {
+  return options.feature_cache_dir.empty() ? DetectFeatures(scan, options.sift)
+                                           : LoadOrDetectFeatures(scan, options.sift, options.feature_cache_dir);
+}
+
+// The link's methods ("3d+dense") when the project holds the pair.
+std::optional<std::pair<CoarseMethod, pipeline::FineMethod>> LinkMethods(const io::Project& project,
+                                                                        const std::string& parent,
+                                                                        const std::string& child) {
+  for (const io::LinkRecord& l : project.links) {
+    if (l.parent != parent || l.child != child) continue;
+    for (CoarseMethod c : pipeline::AllCoarseMethods())
+      for (pipeline::FineMethod f : pipeline::AllFineMethods())
+        if (l.method == std::string(pipeline::CoarseMethodName(c)) + "+" + pipeline::FineMethodName(f))
+          return std::make_pair(c, f);
+  }
+  return std::nullopt;
+}
+
+// Clicks on the scan network: a scan shows its panorama, a link opens its pair. Reads the
+// network's item data (0: "scan" with 1: name, or "parent" with 1: parent, 2: child).
+class NetworkClicks : public QObject {
+ public:
+  NetworkClicks(NetworkPanel* network, PairInspector* inspector)
+      : QObject(inspector), network_(network), inspector_(inspector) {}
+
+ protected:
+  bool eventFilter(QObject*, QEvent* event) override {
+    if (event->type() != QEvent::MouseButtonDblClick) return false;
+    const auto* mouse = static_cast<QMouseEvent*>(event);
+    const QGraphicsItem* item = network_->itemAt(mouse->pos());
+    if (!item) return false;
+    if (item->data(0).toString() == "scan") return inspector_->ShowScan(item->data(1).toString());
+    if (item->data(0).toString() == "parent")
+      return inspector_->OpenPair(item->data(1).toString(), item->data(2).toString());
+    return false;
+  }
+
+ private:
+  NetworkPanel* network_;
+  PairInspector* inspector_;
+};
+
+}  // namespace
+
+PairInspector::PairInspector(MainWindow* window) : QObject(window), window_(window) {
+  panorama_ = new PanoramaView(window);
+  panel_ = new PairPanel(window);
+  auto* pano_dock = new QDockWidget(tr("Panorama"), window);
+  pano_dock->setObjectName("PanoramaViewDock");
+  pano_dock->setWidget(panorama_);
+  window->addDockWidget(Qt::BottomDockWidgetArea, pano_dock);
+  auto* pair_dock = new QDockWidget(tr("Pair"), window);
+  pair_dock->setObjectName("PairPanelDock");
+  pair_dock->setWidget(panel_);
+  window->addDockWidget(Qt::LeftDockWidgetArea, pair_dock);
+
+  ScanListPanel* list = window->scanList();
+  connect(list, &QTableWidget::cellClicked, this, [this, list](int row, int) {
+    if (QTableWidgetItem* item = list->item(row, 0)) ShowScan(item->text());
+  });
+  connect(list, &QTableWidget::currentCellChanged, this, [this, list](int row, int, int previous, int) {
+    if (row == previous || !list->hasFocus()) return;  // keyboard navigation only; clicks come above
+    if (QTableWidgetItem* item = list->item(row, 0)) ShowScan(item->text());
+  });
+  ConfusionPanel* confusion = window->confusionPanel();
+  connect(confusion, &QTableWidget::cellClicked, this, [this, confusion](int row, int col) {
+    const QTableWidgetItem* r = confusion->verticalHeaderItem(row);
+    const QTableWidgetItem* c = confusion->horizontalHeaderItem(col);
+    if (!r || !c) return;
+    if (row == col) {
+      ShowScan(r->text());
+      return;
+    }
+    // Open the pair the way the project linked it; otherwise the row's scan is the parent.
+    const io::Project& project = window_->project();
+    for (const io::LinkRecord& l : project.links) {
+      if (l.parent == c->text().toStdString() && l.child == r->text().toStdString()) {
+        OpenPair(c->text(), r->text());
+        return;
+      }
+    }
+    OpenPair(r->text(), c->text());
+  });
+  window->networkPanel()->viewport()->installEventFilter(new NetworkClicks(window->networkPanel(), this));
+
+  connect(window->jobs(), &JobRunner::Succeeded, this, &PairInspector::OnJobSucceeded);
+  connect(window->jobs(), &JobRunner::Failed, this, &PairInspector::OnJobFailed);
+  connect(window, &MainWindow::ProjectChanged, this, &PairInspector::OnProjectChanged);
+  connect(panel_, &PairPanel::RunRequested, this, &PairInspector::RunPair);
+  connect(panel_, &PairPanel::CancelRequested, this, &PairInspector::CancelPair);
+  connect(panel_, &PairPanel::UseResultRequested, this, &PairInspector::UseResult);
+  connect(panel_, &PairPanel::ShowProjectRequested, window, &MainWindow::Refresh);
+}
+
+void PairInspector::OnProjectChanged() {
+  QStringList names;
+  for (const io::ProjectScan& s : window_->project().scans) names << QString::fromStdString(s.name);
+  panel_->SetScans(names);
+  const void* identity = window_->scans().empty() ? nullptr : window_->scans().data();
+  if (identity == scans_identity_) return;
+  // Another project (or the scans reloaded): what was computed belongs to the old one.
+  scans_identity_ = identity;
+  panoramas_.clear();
+  last_pair_.reset();
+  panorama_->ShowMessage(tr("Select a scan in the scan list, or a cell of the confusion matrix, to see its panorama."));
+  panel_->ShowMessage("-", "");
+}
+
+void PairInspector::StartOrQueue(std::function<bool()> start) {
+  if (window_->jobs()->busy()) {
+    queued_ = std::move(start);
+    return;
+  }
+  queued_ = nullptr;
+  start();
+}
+
+bool PairInspector::Start(const QString& title,
+                          std::function<Expected<std::any>(ProgressSink&, const CancelToken&)> job) {
+  if (!window_->jobs()->Start(title, std::move(job))) return false;
+  running_ = title;
+  return true;
+}
+
+bool PairInspector::ShowScan(const QString& name) {
+  if (window_->project().FindScan(name.toStdString()) < 0) return false;
+  if (auto it = panoramas_.find(name); it != panoramas_.end()) {
+    panorama_->ShowScan(it->second);
+    return true;
+  }
+  panorama_->ShowMessage(tr("Computing the panorama of %1…").arg(name));
+  StartOrQueue([this, name] {
+    const int i = window_->project().FindScan(name.toStdString());
+    if (i < 0 || i >= static_cast<int>(window_->scans().size())) return false;
+    // A copy for the worker: core data are never shared between threads.
+    return Start(tr("Panorama of %1").arg(name), [scan = window_->scans()[i], name,
+                                                   options = window_->RegistrationOptions()](
+                                                      ProgressSink& progress, const CancelToken& cancel) {
+      progress.Report(0.1, "features of " + scan.name);
+      Expected<ScanFeatures> features = Features(scan, options);
+      if (!features) return Expected<std::any>(features.error());
+      if (cancel.IsCancelled()) return Expected<std::any>(MakeError(ErrorCode::kCancelled, "cancelled"));
+      return Expected<std::any>(std::any(PanoramaImage{name, ReflectancePanorama(scan), features->keypoints}));
+    });
+  });
+  return true;
+}
+
+bool PairInspector::OpenPair(const QString& parent, const QString& child) {
+  const io::Project& project = window_->project();
+  if (parent == child || project.FindScan(parent.toStdString()) < 0 || project.FindScan(child.toStdString()) < 0)
+    return false;
+  panel_->SetPair(parent, child);
+  if (const auto methods = LinkMethods(project, parent.toStdString(), child.toStdString()))
+    panel_->SetMethods(methods->first, methods->second);
+  return RunPair();
+}
+
+bool PairInspector::RunPair() {
+  const QString parent = panel_->parentScan(), child = panel_->childScan();
+  const int p = window_->project().FindScan(parent.toStdString());
+  const int c = window_->project().FindScan(child.toStdString());
+  if (p < 0 || c < 0 || p == c || std::max(p, c) >= static_cast<int>(window_->scans().size())) {
+    panel_->ShowMessage(tr("not run"), tr("choose two different scans of the project"));
+    return false;
+  }
+  panel_->ShowMessage(tr("waiting…"), window_->jobs()->busy() ? tr("starts when the running job ends") : "");
+  panorama_->ShowMessage(tr("Registering %1 to %2…").arg(child, parent));
+  StartOrQueue([this, p, c] {
+    pipeline::RegisterOptions options = window_->RegistrationOptions();
+    options.coarse.method = panel_->coarseMethod();
+    options.fine = panel_->fineMethod();
+    const Scan& ps = window_->scans()[p];
+    const Scan& cs = window_->scans()[c];
+    const QString title = tr("Pair registration %1 → %2").arg(QString::fromStdString(cs.name),
+                                                               QString::fromStdString(ps.name));
+    const bool started = Start(title, [parent = ps, child = cs, options](ProgressSink& progress,
+                                                                       const CancelToken& cancel) {
+      Expected<pipeline::PairInspection> r = pipeline::InspectPair(parent, child, options, {}, progress, cancel);
+      if (!r) return Expected<std::any>(r.error());
+      PairJobResult out;
+      out.parent = {QString::fromStdString(parent.name), ReflectancePanorama(parent), r->parent_features.keypoints};
+      out.child = {QString::fromStdString(child.name), ReflectancePanorama(child), r->child_features.keypoints};
+      out.inspection = std::move(*r);
+      return Expected<std::any>(std::any(std::move(out)));
+    });
+    if (started) panel_->SetRunning(true);
+    return started;
+  });
+  return true;
+}
+
+void PairInspector::CancelPair() {
+  queued_ = nullptr;
+  if (!running_.isEmpty()) window_->jobs()->Cancel();
+}
+
+void PairInspector::OnJobSucceeded(const QString& title, const std::any& result) {
+  if (title == running_) {
+    running_.clear();
+    if (const auto* pano = std::any_cast<PanoramaImage>(&result)) {
+      panoramas_[pano->scan] = *pano;
+      panorama_->ShowScan(*pano);
+    } else if (const auto* pair = std::any_cast<PairJobResult>(&result)) {
+      panoramas_[pair->parent.scan] = pair->parent;
+      panoramas_[pair->child.scan] = pair->child;
+      last_pair_ = pair->inspection;
+      panel_->SetRunning(false);
+      panel_->ShowResult(pair->inspection);
+      panorama_->ShowPair(pair->parent, pair->child, pair->inspection.matches, pair->inspection.coarse_inlier);
+      ShowOverlay();
+    }
+  }
+  if (queued_) QTimer::singleShot(0, this, [this] { if (queued_) StartOrQueue(queued_); });
+}
+
+void PairInspector::OnJobFailed(const QString& title, const QString& message, bool cancelled) {
+  if (title == running_) {
+    running_.clear();
+    panel_->SetRunning(false);
+    if (title.startsWith(tr("Pair registration"))) {
+      panel_->ShowMessage(cancelled ? tr("cancelled") : tr("error"),
+                          cancelled ? tr("the project is unchanged") : message);
+      panorama_->ShowMessage(cancelled ? tr("Pair registration cancelled.") : message);
+    } else {
+      panorama_->ShowMessage(cancelled ? tr("Cancelled.") : message);
+    }
+  }
+  if (queued_) QTimer::singleShot(0, this, [this] { if (queued_) StartOrQueue(queued_); });
+}
+
+void PairInspector::ShowOverlay() {
+  if (!last_pair_) return;
+  const DistanceOverlay overlay = MakeDistanceOverlay(*last_pair_, kOverlayScaleMax_m);
+  window_->view3d()->SetActors(overlay.clouds);
+  window_->view3d()->renderer()->AddViewProp(overlay.legend);
+  window_->view3d()->ResetCamera();  // renders with the legend
+}
+
+void PairInspector::UseResult() {
+  if (last_pair_) window_->UsePairResult(last_pair_->result.link);
+}
+
+}  // namespace scanreg::ui

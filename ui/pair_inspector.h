@@ -1,0 +1,63 @@
+// Wires the panorama view and the pair panel to the main window: selecting a scan in the scan
+// list shows its panorama; clicking a confusion-matrix cell (or the pair panel's Run) registers
+// that pair on the worker and shows both panoramas with the inlier / outlier matches, the
+// evidence in the pair panel and both scans in the 3D view coloured by their distance to each
+// other. Jobs run on the window's JobRunner (progress and Cancel in the status bar); a request
+// made while another job runs starts when it ends.
+#pragma once
+
+#include <QObject>
+#include <QString>
+#include <any>
+#include <functional>
+#include <map>
+#include <optional>
+
+#include "core/pipeline/inspect_pair.h"
+#include "ui/panorama_view.h"
+
+namespace scanreg::ui {
+
+class MainWindow;
+class PairPanel;
+
+class PairInspector : public QObject {
+  Q_OBJECT
+
+ public:
+  // Creates the panorama view and the pair panel as docks of the window.
+  explicit PairInspector(MainWindow* window);
+
+  PanoramaView* panoramaView() const { return panorama_; }
+  PairPanel* pairPanel() const { return panel_; }
+  // The last pair run that succeeded (its evidence is in the pair panel); none after a reload.
+  const std::optional<pipeline::PairInspection>& lastPair() const { return last_pair_; }
+
+  // Each returns false when the request is not possible (unknown scan, no project); a request
+  // made while a job runs is queued (the latest wins) and returns true.
+  bool ShowScan(const QString& name);
+  // Selects the pair in the panel (with the link's methods when the project has that link) and runs it.
+  bool OpenPair(const QString& parent, const QString& child);
+  bool RunPair();  // the panel's pair and methods
+  void CancelPair();
+
+ private:
+  void OnProjectChanged();
+  void OnJobSucceeded(const QString& title, const std::any& result);
+  void OnJobFailed(const QString& title, const QString& message, bool cancelled);
+  void StartOrQueue(std::function<bool()> start);
+  bool Start(const QString& title, std::function<Expected<std::any>(ProgressSink&, const CancelToken&)> job);
+  void ShowOverlay();
+  void UseResult();
+
+  MainWindow* window_;
+  PanoramaView* panorama_ = nullptr;
+  PairPanel* panel_ = nullptr;
+  std::map<QString, PanoramaImage> panoramas_;  // computed panoramas by scan name (this project)
+  const void* scans_identity_ = nullptr;        // the window's scans these panoramas belong to
+  std::optional<pipeline::PairInspection> last_pair_;
+  QString running_;                             // title of this inspector's running job
+  std::function<bool()> queued_;
+};
+
+}  // namespace scanreg::ui
