@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
-#include <vector>
 
 namespace scanreg::io::e57 {
 
@@ -16,17 +15,26 @@ inline int BitWidth(std::int64_t minimum, std::int64_t maximum) {
   return range == 0 ? 0 : 64 - __builtin_clzll(range);
 }
 
-// Reads a bytestream given as the pieces it has in successive data packets.
+// Reads a bytestream fed piece by piece, as its parts arrive in successive data packets. A value
+// may span pieces; Read() fails (consuming nothing it cannot give back later) until enough
+// bytes have been appended.
 class BitReader {
  public:
-  void AddSegment(std::string_view bytes) {
-    if (!bytes.empty()) segments_.push_back(bytes);
+  void Append(std::string_view bytes) {
+    if (offset_ > 0 && offset_ >= data_.size() / 2) {
+      data_.erase(0, offset_);
+      offset_ = 0;
+    }
+    data_.append(bytes.data(), bytes.size());
   }
-  // The next `bits` (0..64) bits as an unsigned value; false when the stream is exhausted.
+  std::uint64_t AvailableBits() const { return std::uint64_t(have_) + 8 * (data_.size() - offset_); }
+  // The next `bits` (0..64) bits as an unsigned value; false when fewer bits are available.
   bool Read(int bits, std::uint64_t* value) {
+    if (AvailableBits() < std::uint64_t(bits)) return false;
     if (bits <= 32) return ReadSmall(bits, value);
     std::uint64_t low = 0, high = 0;
-    if (!ReadSmall(32, &low) || !ReadSmall(bits - 32, &high)) return false;
+    ReadSmall(32, &low);
+    ReadSmall(bits - 32, &high);
     *value = low | (high << 32);
     return true;
   }
@@ -34,9 +42,7 @@ class BitReader {
  private:
   bool ReadSmall(int bits, std::uint64_t* value) {
     while (have_ < bits) {
-      while (segment_ < segments_.size() && offset_ == segments_[segment_].size()) ++segment_, offset_ = 0;
-      if (segment_ == segments_.size()) return false;
-      acc_ |= std::uint64_t(static_cast<unsigned char>(segments_[segment_][offset_++])) << have_;
+      acc_ |= std::uint64_t(static_cast<unsigned char>(data_[offset_++])) << have_;
       have_ += 8;
     }
     *value = bits == 0 ? 0 : acc_ & (~std::uint64_t(0) >> (64 - bits));
@@ -45,8 +51,8 @@ class BitReader {
     return true;
   }
 
-  std::vector<std::string_view> segments_;
-  std::size_t segment_ = 0, offset_ = 0;
+  std::string data_;
+  std::size_t offset_ = 0;
   std::uint64_t acc_ = 0;
   int have_ = 0;
 };

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "core/io/e57_bitpack.h"
 
@@ -10,6 +11,8 @@ namespace scanreg::io::e57 {
 namespace {
 
 constexpr int kProgressSteps = 40;
+constexpr std::uint64_t kChunk = 1 << 20;  // logical bytes read at a time
+constexpr double kFarAway = 1e4;           // metres; float keeps ~1 mm up to here
 
 enum class Role { kX, kY, kZ, kRange, kAzimuth, kElevation, kIntensity, kRow, kColumn, kInvalid, kReturn, kOther };
 
@@ -21,11 +24,6 @@ std::uint64_t LoadU64(const char* p) {
 
 std::uint16_t LoadU16(const char* p) {
   return static_cast<std::uint16_t>(static_cast<unsigned char>(p[0]) | (static_cast<unsigned char>(p[1]) << 8));
-}
-
-// A grid index stored as a Float; -1 (outside every grid) when it is not a whole number.
-std::int64_t WholeOrMinusOne(double v) {
-  return std::isfinite(v) && std::fabs(v) < 1e15 && v == std::floor(v) ? std::int64_t(v) : -1;
 }
 
 struct FieldStream {
@@ -59,42 +57,158 @@ std::vector<FieldStream> MakeStreams(const ScanDesc& scan) {
   return streams;
 }
 
-// Splits the section's data packets into the bytestreams of each field.
-Status CollectBytestreams(const std::string& section, std::uint64_t data_start, std::vector<FieldStream>& streams,
-                          const std::string& where) {
-  auto bad = [&](std::uint64_t pos, const std::string& what) {
-    return MakeError(ErrorCode::kParseError, where + ": packet at byte " + std::to_string(pos) +
+// Whole packets from a window of the section's bytes, appended to the fields' bytestreams.
+class PacketParser {
+ public:
+  PacketParser(std::vector<FieldStream>& streams, std::string where) : streams_(streams), where_(std::move(where)) {}
+
+  // bytes: the window; offset: its position in the section. Returns the bytes used (whole packets).
+  Expected<std::size_t> Parse(std::string_view bytes, std::uint64_t offset) {
+    std::size_t pos = 0;
+    while (bytes.size() - pos >= 4) {
+      const char* p = bytes.data() + pos;
+      const auto type = static_cast<std::uint8_t>(p[0]);
+      const std::size_t length = std::size_t(LoadU16(p + 2)) + 1;
+      if (type != kDataPacket && type != kIndexPacket && type != kEmptyPacket) {
+        return Bad(offset + pos, "unknown packet type " + std::to_string(type));
+      }
+      if (bytes.size() - pos < length) break;  // the rest comes with the next window
+      if (type == kDataPacket) {
+        if (Status s = DataPacket(std::string_view(p, length), offset + pos); !s) return s.error();
+      }
+      pos += length;
+    }
+    return pos;
+  }
+
+  Error Bad(std::uint64_t at, const std::string& what) const {
+    return MakeError(ErrorCode::kParseError, where_ + ": packet at byte " + std::to_string(at) +
                                                  " of the points section: " + what +
                                                  "; the file is damaged, copy or export it again");
-  };
-  std::uint64_t pos = data_start;
-  while (section.size() - pos >= 4) {
-    const char* p = section.data() + pos;
-    const auto type = static_cast<std::uint8_t>(p[0]);
-    const std::uint64_t length = std::uint64_t(LoadU16(p + 2)) + 1;
-    if (pos + length > section.size()) return bad(pos, "its length runs past the end of the section");
-    if (type == kDataPacket) {
-      if (length < 6) return bad(pos, "a data packet shorter than its header");
-      const std::size_t count = LoadU16(p + 4);
-      if (count != streams.size()) {
-        return bad(pos, "a data packet with " + std::to_string(count) + " bytestreams, but the prototype has " +
-                            std::to_string(streams.size()) + " fields");
-      }
-      std::uint64_t offset = 6 + 2 * count;
-      if (offset > length) return bad(pos, "its bytestream lengths run past the packet");
-      for (std::size_t k = 0; k < count; ++k) {
-        const std::uint64_t n = LoadU16(p + 6 + 2 * k);
-        if (offset + n > length) return bad(pos, "bytestream " + std::to_string(k + 1) + " runs past the packet");
-        streams[k].bits.AddSegment(std::string_view(p + offset, n));
-        offset += n;
-      }
-    } else if (type != kIndexPacket && type != kEmptyPacket) {
-      return bad(pos, "unknown packet type " + std::to_string(type));
-    }
-    pos += length;
   }
-  return Status::Ok();
+
+ private:
+  Status DataPacket(std::string_view packet, std::uint64_t at) {
+    if (packet.size() < 6) return Bad(at, "a data packet shorter than its header");
+    const std::size_t count = LoadU16(packet.data() + 4);
+    if (count != streams_.size()) {
+      return Bad(at, "a data packet with " + std::to_string(count) + " bytestreams, but the prototype has " +
+                         std::to_string(streams_.size()) + " fields");
+    }
+    std::size_t offset = 6 + 2 * count;
+    if (offset > packet.size()) return Bad(at, "its bytestream lengths run past the packet");
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t n = LoadU16(packet.data() + 6 + 2 * k);
+      if (offset + n > packet.size()) return Bad(at, "bytestream " + std::to_string(k + 1) + " runs past the packet");
+      streams_[k].bits.Append(packet.substr(offset, n));
+      offset += n;
+    }
+    return Status::Ok();
+  }
+
+  std::vector<FieldStream>& streams_;
+  std::string where_;
+};
+
+// A grid index stored as a Float; -1 (outside every grid) when it is not a whole number.
+std::int64_t WholeOrMinusOne(double v) {
+  return std::isfinite(v) && std::fabs(v) < 1e15 && v == std::floor(v) ? std::int64_t(v) : -1;
 }
+
+// Decodes records one at a time into `out`.
+class RecordDecoder {
+ public:
+  RecordDecoder(std::vector<FieldStream>& streams, bool spherical, std::string where, PointRecords& out)
+      : streams_(streams), spherical_(spherical), where_(std::move(where)), out_(out) {}
+
+  // How many whole records the bytestreams hold now.
+  std::uint64_t Available() const {
+    std::uint64_t n = std::numeric_limits<std::uint64_t>::max();
+    for (const FieldStream& s : streams_)
+      if (s.field->bits > 0) n = std::min(n, s.bits.AvailableBits() / std::uint64_t(s.field->bits));
+    return n;
+  }
+
+  Status Decode(std::size_t i) {
+    double c[3] = {0, 0, 0};
+    bool valid = true;
+    for (FieldStream& s : streams_) {
+      const Field& f = *s.field;
+      std::uint64_t bits = 0;
+      s.bits.Read(f.bits, &bits);  // Available() said the bits are there
+      double value = 0;
+      std::int64_t raw = 0;
+      if (f.type == FieldType::kFloat) {
+        if (f.single_precision) {
+          const auto u = static_cast<std::uint32_t>(bits);
+          float v;
+          std::memcpy(&v, &u, 4);
+          value = v;
+        } else {
+          std::memcpy(&value, &bits, 8);
+        }
+        raw = WholeOrMinusOne(value);
+      } else {
+        raw = static_cast<std::int64_t>(static_cast<std::uint64_t>(f.minimum) + bits);
+        if (raw > f.maximum || raw < f.minimum) {
+          return Bad(i, "'" + f.name + "' = " + std::to_string(raw) + " is above its maximum " +
+                            std::to_string(f.maximum));
+        }
+        value = f.type == FieldType::kScaledInteger ? double(raw) * f.scale + f.offset : double(raw);
+      }
+      switch (s.role) {
+        case Role::kX:
+        case Role::kRange: c[0] = value; break;
+        case Role::kY:
+        case Role::kAzimuth: c[1] = value; break;
+        case Role::kZ:
+        case Role::kElevation: c[2] = value; break;
+        case Role::kIntensity: out_.intensity[i] = static_cast<float>(value); break;
+        case Role::kRow:
+        case Role::kColumn: {
+          if (raw < std::numeric_limits<std::int32_t>::min() || raw > std::numeric_limits<std::int32_t>::max()) {
+            return Bad(i, "'" + f.name + "' = " + std::to_string(raw) + " is not a usable grid index");
+          }
+          (s.role == Role::kRow ? out_.row : out_.column)[i] = static_cast<std::int32_t>(raw);
+          break;
+        }
+        case Role::kInvalid:
+        case Role::kReturn: valid = valid && value == 0.0; break;
+        case Role::kOther: break;
+      }
+    }
+    if (spherical_) {
+      const double r = c[0], az = c[1], el = c[2];
+      c[0] = r * std::cos(el) * std::cos(az);
+      c[1] = r * std::cos(el) * std::sin(az);
+      c[2] = r * std::sin(el);
+    }
+    const Eigen::Vector3d p(c[0], c[1], c[2]);
+    out_.valid[i] = valid;
+    if (!valid) return Status::Ok();
+    if (!p.allFinite() || (!out_.intensity.empty() && !std::isfinite(out_.intensity[i]))) {
+      return Bad(i, "a NaN or infinite coordinate or intensity, but the point is not marked invalid");
+    }
+    if (!shift_decided_) {
+      shift_decided_ = true;
+      if (p.cwiseAbs().maxCoeff() > kFarAway) out_.shift = p.array().round().matrix();
+    }
+    out_.xyz[i] = (p - out_.shift).cast<float>();
+    return Status::Ok();
+  }
+
+ private:
+  Error Bad(std::size_t i, const std::string& what) const {
+    return MakeError(ErrorCode::kParseError,
+                     where_ + ": record " + std::to_string(i + 1) + ": " + what + "; the file is damaged");
+  }
+
+  std::vector<FieldStream>& streams_;
+  bool spherical_;
+  std::string where_;
+  PointRecords& out_;
+  bool shift_decided_ = false;
+};
 
 }  // namespace
 
@@ -128,85 +242,50 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
                      where + ": recordCount " + std::to_string(scan.record_count) + " is more than the points section (" +
                          std::to_string(section_length) + " bytes) can hold; the file is truncated or damaged");
   }
-  std::string section;
-  if (Status s = file.Read(scan.points_offset, section_length, "the points section of " + scan_label, &section); !s)
-    return s.error();
-  std::vector<FieldStream> streams = MakeStreams(scan);
-  if (Status s = CollectBytestreams(section, data_start, streams, where); !s) return s.error();
 
+  std::vector<FieldStream> streams = MakeStreams(scan);
   const std::size_t n = scan.record_count;
-  const bool spherical = scan.FieldIndex("cartesianX") < 0;
   out.xyz.resize(n);
-  out.valid.assign(n, 1);
+  out.valid.resize(n);
   for (const FieldStream& s : streams) {
     if (s.role == Role::kIntensity) out.intensity.resize(n);
     if (s.role == Role::kRow) out.row.resize(n);
     if (s.role == Role::kColumn) out.column.resize(n);
-    if (s.role == Role::kReturn) out.first_return.resize(n);
   }
+  PacketParser parser(streams, where);
+  RecordDecoder decoder(streams, scan.FieldIndex("cartesianX") < 0, where, out);
   const std::size_t report_every = std::max<std::size_t>(1, n / kProgressSteps);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i % report_every == 0) {
-      if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, file.source() + ": cancelled");
-      progress.Report(double(i) / double(n), "reading " + scan_label);
-    }
-    double c[3] = {0, 0, 0};
-    for (FieldStream& s : streams) {
-      const Field& f = *s.field;
-      std::uint64_t bits = 0;
-      if (!s.bits.Read(f.bits, &bits)) {
-        return MakeError(ErrorCode::kParseError, where + ": the bytestream of '" + f.name + "' ends after " +
-                                                     std::to_string(i) + " of " + std::to_string(n) +
-                                                     " records; the file is truncated or damaged");
+  std::string window, chunk;
+  std::uint64_t window_offset = data_start;  // the window's position in the section
+  std::uint64_t next_read = data_start;
+  std::size_t done = 0;
+  while (done < n) {
+    const std::uint64_t ready = std::min<std::uint64_t>(decoder.Available(), n - done);
+    for (std::uint64_t k = 0; k < ready; ++k, ++done) {
+      if (done % report_every == 0) {
+        if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, file.source() + ": cancelled");
+        progress.Report(double(done) / double(n), "reading " + scan_label);
       }
-      double value = 0;
-      std::int64_t raw = 0;
-      if (f.type == FieldType::kFloat) {
-        if (f.single_precision) {
-          const auto u = static_cast<std::uint32_t>(bits);
-          float v;
-          std::memcpy(&v, &u, 4);
-          value = v;
-        } else {
-          std::memcpy(&value, &bits, 8);
-        }
-      } else {
-        raw = static_cast<std::int64_t>(static_cast<std::uint64_t>(f.minimum) + bits);
-        if (raw > f.maximum || raw < f.minimum) {
-          return MakeError(ErrorCode::kParseError, where + ": record " + std::to_string(i + 1) + ": '" + f.name +
-                                                       "' = " + std::to_string(raw) + " is above its maximum " +
-                                                       std::to_string(f.maximum) + "; the file is damaged");
-        }
-        value = f.type == FieldType::kScaledInteger ? double(raw) * f.scale + f.offset : double(raw);
-      }
-      switch (s.role) {
-        case Role::kX:
-        case Role::kRange: c[0] = value; break;
-        case Role::kY:
-        case Role::kAzimuth: c[1] = value; break;
-        case Role::kZ:
-        case Role::kElevation: c[2] = value; break;
-        case Role::kIntensity: out.intensity[i] = static_cast<float>(value); break;
-        case Role::kRow: out.row[i] = f.type == FieldType::kFloat ? WholeOrMinusOne(value) : raw; break;
-        case Role::kColumn: out.column[i] = f.type == FieldType::kFloat ? WholeOrMinusOne(value) : raw; break;
-        case Role::kInvalid: out.valid[i] = value == 0.0; break;
-        case Role::kReturn: out.first_return[i] = value == 0.0; break;
-        case Role::kOther: break;
-      }
+      if (Status s = decoder.Decode(done); !s) return s.error();
     }
-    if (spherical) {
-      const double r = c[0], az = c[1], el = c[2];
-      c[0] = r * std::cos(el) * std::cos(az);
-      c[1] = r * std::cos(el) * std::sin(az);
-      c[2] = r * std::sin(el);
+    if (done == n) break;
+    if (next_read == section_length) {
+      if (window.size() >= 4) return parser.Bad(window_offset, "it runs past the end of the section");
+      return MakeError(ErrorCode::kParseError, where + ": the points section ends after " + std::to_string(done) +
+                                                   " of " + std::to_string(n) +
+                                                   " records; the file is truncated or damaged");
     }
-    out.xyz[i] = Eigen::Vector3d(c[0], c[1], c[2]);
-    if (out.valid[i] && !(std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]) &&
-                          (out.intensity.empty() || std::isfinite(out.intensity[i])))) {
-      return MakeError(ErrorCode::kParseError, where + ": record " + std::to_string(i + 1) +
-                                                   " has a NaN or infinite coordinate or intensity but is not marked "
-                                                   "invalid; the exporter wrote bad data");
-    }
+    const std::uint64_t take = std::min(kChunk, section_length - next_read);
+    if (Status s = file.Read(PhysicalFromLogical(section_start + next_read), take,
+                             "the points section of " + scan_label, &chunk);
+        !s)
+      return s.error();
+    next_read += take;
+    window += chunk;
+    Expected<std::size_t> used = parser.Parse(window, window_offset);
+    if (!used) return used.error();
+    window.erase(0, *used);
+    window_offset += *used;
   }
   progress.Report(1.0, "reading " + scan_label);
   return out;

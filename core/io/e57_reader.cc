@@ -15,7 +15,6 @@ namespace {
 constexpr double kMaxSide = 1e6;         // rows or columns
 constexpr double kMaxCells = 5e8;        // rows * columns
 constexpr double kMaxCellsPerPoint = 1e3;  // a grid far sparser than this is a corrupt index
-constexpr double kFarAway = 1e4;         // metres; float keeps ~1 mm up to here
 
 struct OpenedE57 {
   e57::PagedReader file;
@@ -87,31 +86,15 @@ std::pair<double, double> IntensityRange(const e57::ScanDesc& desc, const e57::P
   return {lo, hi};
 }
 
-bool Keep(const e57::PointRecords& records, std::size_t i) {
-  return records.valid[i] && (records.first_return.empty() || records.first_return[i]);
-}
-
-// A whole-metre shift that brings far-away points near the origin (zero when they are near).
-Eigen::Vector3d FarAwayShift(const e57::PointRecords& records) {
-  for (std::size_t i = 0; i < records.xyz.size(); ++i) {
-    if (!Keep(records, i)) continue;
-    if (records.xyz[i].cwiseAbs().maxCoeff() > kFarAway) {
-      return Eigen::Vector3d(std::round(records.xyz[i].x()), std::round(records.xyz[i].y()),
-                             std::round(records.xyz[i].z()));
-    }
-  }
-  return Eigen::Vector3d::Zero();
-}
-
 Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& desc, std::string name,
-                        const std::string& where, const Eigen::Vector3d& shift,
-                        const std::pair<double, double>& intensity_range) {
+                        const std::string& where, const std::pair<double, double>& intensity_range) {
   std::int64_t row_min = std::numeric_limits<std::int64_t>::max(), row_max = std::numeric_limits<std::int64_t>::min();
   std::int64_t col_min = row_min, col_max = row_max;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
-    if (!Keep(records, i)) continue;
-    row_min = std::min(row_min, records.row[i]), row_max = std::max(row_max, records.row[i]);
-    col_min = std::min(col_min, records.column[i]), col_max = std::max(col_max, records.column[i]);
+    if (!records.valid[i]) continue;
+    row_min = std::min<std::int64_t>(row_min, records.row[i]), row_max = std::max<std::int64_t>(row_max, records.row[i]);
+    col_min = std::min<std::int64_t>(col_min, records.column[i]);
+    col_max = std::max<std::int64_t>(col_max, records.column[i]);
   }
   if (desc.index_bounds) {
     const e57::IndexBounds& b = *desc.index_bounds;
@@ -140,28 +123,28 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
                            ? 1.0 / (intensity_range.second - intensity_range.first)
                            : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
-    if (!Keep(records, i)) continue;
+    if (!records.valid[i]) continue;
     const int r = int(records.row[i] - row_min), c = int(records.column[i] - col_min);
     if (scan.IsValid(r, c)) continue;  // keep the first point of a cell
     const float refl = records.intensity.empty() ? 0.5f
                        : scale > 0.0     ? float((records.intensity[i] - intensity_range.first) * scale)
                                          : 0.5f;
-    scan.Set(r, c, (records.xyz[i] - shift).cast<float>(), refl);
+    scan.Set(r, c, records.xyz[i], refl);
   }
   EstimateAngularGrid(scan);
   return scan;
 }
 
 Expected<Scan> CloudScan(const e57::PointRecords& records, std::string name, const std::string& where,
-                         const Eigen::Vector3d& shift, const std::pair<double, double>& intensity_range) {
+                         const std::pair<double, double>& intensity_range) {
   std::vector<Eigen::Vector3f> points;
   std::vector<float> reflectance;
   const double scale = intensity_range.second > intensity_range.first
                            ? 1.0 / (intensity_range.second - intensity_range.first)
                            : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
-    if (!Keep(records, i)) continue;
-    points.push_back((records.xyz[i] - shift).cast<float>());
+    if (!records.valid[i]) continue;
+    points.push_back(records.xyz[i]);
     reflectance.push_back(records.intensity.empty() || scale == 0.0
                               ? 0.5f
                               : float((records.intensity[i] - intensity_range.first) * scale));
@@ -211,13 +194,12 @@ Expected<std::vector<Scan>> ReadE57(const std::filesystem::path& path, const E57
     Expected<e57::PointRecords> records = e57::ReadPoints(opened->file, desc, label, sub, cancel);
     if (!records) return records.error();
     const std::string where = path.string() + ": " + label;
-    const Eigen::Vector3d shift = FarAwayShift(*records);
     const auto intensity_range = IntensityRange(desc, *records);
     std::string name = ScanName(desc, i, descs.size(), path);
-    Expected<Scan> scan = desc.HasGrid() ? GridScan(*records, desc, std::move(name), where, shift, intensity_range)
-                                         : CloudScan(*records, std::move(name), where, shift, intensity_range);
+    Expected<Scan> scan = desc.HasGrid() ? GridScan(*records, desc, std::move(name), where, intensity_range)
+                                         : CloudScan(*records, std::move(name), where, intensity_range);
     if (!scan) return scan.error();
-    scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(shift);
+    scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(records->shift);
     scans.push_back(std::move(*scan));
   }
   progress.Report(1.0, "reading " + path.filename().string());
