@@ -23,11 +23,14 @@ inline double FastErf(double x) {
 
 }  // namespace
 
+double CandidateRadius(const MergeOptions& options) {
+  return options.method == MergeMethod::kMaximumLikelihood ? options.Band() + 3.0 * options.sigma_m : options.Band();
+}
+
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                               std::vector<int>* scratch, float* distance) {
+                               const std::vector<int>& candidates, float* distance) {
   const double sigma = options.sigma_m, band = options.Band();
-  patches.Candidates(x, band + 3.0 * sigma, scratch);
-  if (scratch->empty()) return false;
+  if (candidates.empty()) return false;
   // Step 1: nearest point p' of every candidate patch; d_min.
   struct Near {
     float dist;
@@ -37,21 +40,21 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
   thread_local std::vector<Near> near;
   thread_local std::vector<Eigen::Vector3f> closest;
   near.clear();
-  closest.resize(scratch->size());
+  closest.resize(candidates.size());
   float d_min = std::numeric_limits<float>::max();
-  for (std::size_t i = 0; i < scratch->size(); ++i) {
-    const Patch& p = patches.patches[(*scratch)[i]];
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const Patch& p = patches.patches[candidates[i]];
     closest[i] = ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]);
     d_min = std::min(d_min, (closest[i] - x).norm());
   }
   if (d_min > band) return false;
   const float limit = float(d_min + 3.0 * sigma);
   float nearest_vote = 1.0f;
-  for (std::size_t i = 0; i < scratch->size(); ++i) {
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
     const Eigen::Vector3f to_x = x - closest[i];
     const float d = to_x.norm();
     if (d > limit) continue;
-    const Patch& p = patches.patches[(*scratch)[i]];
+    const Patch& p = patches.patches[candidates[i]];
     // Step 2: phi between the patch's line of sight and the direction to x (the normal when x is on it).
     const Eigen::Vector3f los = (closest[i] - patches.scanner[p.scan]).normalized();
     const Eigen::Vector3f dir = d > 1e-7f ? Eigen::Vector3f(to_x / d) : p.normal;
@@ -66,36 +69,49 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
   const double d_lo = std::max(0.0, double(d_min) - 3.0 * sigma);
   int bins = int(std::ceil((limit - d_lo) / bin)) + 1;
   if (bins > kMaxBins) bins = kMaxBins, bin = (limit - d_lo) / (kMaxBins - 1);
-  thread_local std::vector<double> p_any, log_p1, vote_sum, cdf;
-  p_any.assign(bins, 0.0), log_p1.assign(bins, 0.0), vote_sum.assign(bins, 0.0);
+  // P1 as a product of (1 - F_p(d_k)) with its binary exponent kept apart (thousands of factors
+  // underflow a double): a multiply per patch and bin instead of a log1p.
+  thread_local std::vector<double> p_any, p1, vote_sum, cdf;
+  thread_local std::vector<int> p1_exp, saturated;  // saturated: patches with F_p = 1 from bin k on (P1 = 0)
+  p_any.assign(bins, 0.0), p1.assign(bins, 1.0), vote_sum.assign(bins, 0.0);
+  p1_exp.assign(bins, 0), saturated.assign(bins + 1, 0);
   cdf.resize(bins + 1);
   for (const Near& n : near) {
-    // F_p is 0 below dist - 6 sigma' and 1 above dist + 6 sigma': erf only in between.
+    // F_p is 0 below dist - 6 sigma' and 1 above dist + 6 sigma': erf only in between, and no
+    // work at all below k0 (nothing in the bins, factor 1) or above k1 (nothing, factor 0).
     const double inv = 1.0 / (std::sqrt(2.0) * n.sigma);
     const int k0 = std::clamp(int(std::floor((n.dist - 6.0 * n.sigma - d_lo) / bin)), 0, bins);
     const int k1 = std::clamp(int(std::ceil((n.dist + 6.0 * n.sigma - d_lo) / bin)), 0, bins);
-    for (int k = 0; k < k0; ++k) cdf[k] = 0.0;
     for (int k = k0; k <= k1; ++k) cdf[k] = 0.5 * (1.0 + FastErf((d_lo + k * bin - n.dist) * inv));
-    for (int k = k1 + 1; k <= bins; ++k) cdf[k] = 1.0;
-    for (int k = k0; k < bins; ++k) {
+    if (k1 < bins) cdf[k1 + 1] = 1.0;
+    int k = k0;
+    for (const int last = std::min(k1, bins - 1); k <= last && cdf[k] < 1.0; ++k) {
       const double in_bin = cdf[k + 1] - cdf[k];  // P(d_k <= D_p < d_{k+1})
       p_any[k] += in_bin;
       vote_sum[k] += in_bin * n.vote;
-      log_p1[k] += cdf[k] >= 1.0 ? -700.0 : std::log1p(-cdf[k]);  // no patch nearer than d_k
+      p1[k] *= 1.0 - cdf[k];  // no patch nearer than d_k
+      if (p1[k] < 1e-150) {
+        int e;
+        p1[k] = std::frexp(p1[k], &e);
+        p1_exp[k] += e;
+      }
     }
+    ++saturated[k];  // F_p = 1 from bin k on (k = bins: never)
   }
-  // Step 4: the most likely bin; step 5: parabola through its neighbours.
+  // Step 4: the most likely bin (compared as logarithms); step 5: parabola through its neighbours.
+  thread_local std::vector<double> log_pb;
+  log_pb.assign(bins, -std::numeric_limits<double>::infinity());
   int best = 0;
-  double best_p = -1.0;
-  std::vector<double>& pb = cdf;  // reuse
-  for (int k = 0; k < bins; ++k) {
-    pb[k] = p_any[k] * std::exp(log_p1[k]);
-    if (pb[k] > best_p) best_p = pb[k], best = k;
+  for (int k = 0, m = 0; k < bins; ++k) {
+    m += saturated[k];
+    if (m == 0 && p_any[k] > 0.0) log_pb[k] = std::log(p_any[k] * p1[k]) + p1_exp[k] * M_LN2;
+    if (log_pb[k] > log_pb[best]) best = k;
   }
   double offset = 0.0;
-  if (best > 0 && best + 1 < bins) {
-    const double a = pb[best - 1], b = pb[best], c = pb[best + 1];
-    const double den = a - 2.0 * b + c;
+  if (best > 0 && best + 1 < bins && std::isfinite(log_pb[best])) {
+    // P_b relative to the best bin (the vertex of the parabola does not depend on the scale).
+    const double a = std::exp(log_pb[best - 1] - log_pb[best]), c = std::exp(log_pb[best + 1] - log_pb[best]);
+    const double den = a - 2.0 + c;
     if (den < 0.0) offset = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
   }
   const double magnitude = std::max(0.0, d_lo + (best + 0.5 + offset) * bin);
@@ -107,16 +123,21 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
 }
 
 float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                   std::vector<int>* scratch, float* distance) {
+                   const std::vector<int>& candidates, float* distance) {
   const double band = options.Band();
-  patches.Candidates(x, band, scratch);
   thread_local std::vector<std::pair<float, int>> nearest;  // per scan: (distance, patch)
   nearest.assign(patches.scanner.size(), {std::numeric_limits<float>::max(), -1});
-  for (int id : *scratch) {
-    const Patch& p = patches.patches[id];
+  for (auto it = candidates.begin(); it != candidates.end(); ++it) {
+    const Patch& p = patches.patches[*it];
+    if (!patches.Reaches(*it, x, float(band))) continue;
     const float d = (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]],
                                             patches.points[p.v[2]]) - x).norm();
-    if (d <= band && d < nearest[p.scan].first) nearest[p.scan] = {d, id};
+    if (d > band || d >= nearest[p.scan].first) continue;
+    nearest[p.scan] = {d, *it};
+    if (patches.views[p.scan].empty()) continue;
+    // A scan with a range image needs only one patch within the band (x is projected into it):
+    // skip the rest of its patches (ascending ids are grouped by scan).
+    it = std::partition_point(it, candidates.end(), [&](int id) { return patches.patches[id].scan == p.scan; }) - 1;
   }
   double sum = 0.0, weight = 0.0;
   bool projected = false;
@@ -171,7 +192,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   if (Status s = options.Validate(); !s) return s.error();
   const double band = options.Band();
   const bool ml = options.method == MergeMethod::kMaximumLikelihood;
-  patches.BuildHash(ml ? band + 3.0 * options.sigma_m : band);
+  patches.BuildHash(CandidateRadius(options));
   SparseGrid grid(patches.origin, options.voxel_m);
   progress.Report(0.0, "allocating blocks");
   for (std::size_t i = 0; i < patches.points.size(); ++i) {
@@ -182,7 +203,11 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   std::atomic<long> done{0};
   std::atomic<bool> cancelled{false};
   const char* stage = ml ? "maximum-likelihood distance" : "TSDF";
-  constexpr int B = SparseGrid::kBlock;
+  constexpr int B = SparseGrid::kBlock, G = 4;
+  static_assert(B % G == 0);
+  const double radius = CandidateRadius(options);
+  // Half the diagonal of a group, with a margin for float rounding.
+  const double group_reach = 0.5 * std::sqrt(3.0) * (G - 1) * options.voxel_m * 1.001 + 1e-6;
 #pragma omp parallel for schedule(dynamic, 4)
   for (long bi = 0; bi < n; ++bi) {
     if (cancelled.load(std::memory_order_relaxed)) continue;
@@ -191,18 +216,33 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
       continue;
     }
     SparseGrid::Block& b = grid.block(bi);
-    std::vector<int> scratch;
-    for (int z = 0; z < B; ++z) {
-      for (int y = 0; y < B; ++y) {
-        for (int x = 0; x < B; ++x) {
-          const int l = SparseGrid::Local(x, y, z);
-          const Eigen::Vector3f p = grid.Position(b.key, x, y, z);
-          float d = 0.0f;
-          if (ml) {
-            if (MaximumLikelihoodDistance(patches, p, options, &scratch, &d)) b.distance[l] = d, b.weight[l] = 1.0f;
-          } else {
-            const float w = TsdfDistance(patches, p, options, &scratch, &d);
-            if (w > 0.0f) b.distance[l] = d, b.weight[l] = w;
+    std::vector<int> group, candidates;
+    // One hash query per G^3 group of grid points, then a bounding-sphere filter per point: the
+    // same candidates as a query per point, without its hash look-ups and sorting.
+    for (int gz = 0; gz < B; gz += G) {
+      for (int gy = 0; gy < B; gy += G) {
+        for (int gx = 0; gx < B; gx += G) {
+          const Eigen::Vector3f centre =
+              0.5f * (grid.Position(b.key, gx, gy, gz) + grid.Position(b.key, gx + G - 1, gy + G - 1, gz + G - 1));
+          patches.Candidates(centre, radius + group_reach, &group);
+          if (group.empty()) continue;
+          for (int z = gz; z < gz + G; ++z) {
+            for (int y = gy; y < gy + G; ++y) {
+              for (int x = gx; x < gx + G; ++x) {
+                const int l = SparseGrid::Local(x, y, z);
+                const Eigen::Vector3f p = grid.Position(b.key, x, y, z);
+                float d = 0.0f;
+                if (ml) {
+                  patches.Filter(group, p, radius, &candidates);
+                  if (MaximumLikelihoodDistance(patches, p, options, candidates, &d)) {
+                    b.distance[l] = d, b.weight[l] = 1.0f;
+                  }
+                } else {  // its bounding-sphere test is inside, after the cheaper one-patch-per-scan test
+                  const float w = TsdfDistance(patches, p, options, group, &d);
+                  if (w > 0.0f) b.distance[l] = d, b.weight[l] = w;
+                }
+              }
+            }
           }
         }
       }

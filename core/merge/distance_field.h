@@ -15,7 +15,8 @@ namespace scanreg::merge {
 
 // Allocates the blocks within options.Band() of the input points and evaluates every grid point
 // there, in parallel over blocks; grid points farther than the band from every patch stay unknown.
-// Progress: at most ~200 reports; cancel is checked once per block.
+// Candidate patches are gathered once per 4^3 group of grid points. Progress: at most ~200
+// reports; cancel is checked once per block.
 Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                   const CancelToken& cancel);
 
@@ -23,14 +24,20 @@ Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOpt
 Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
                                   const CancelToken& cancel);
 
+// Radius within which a grid point's field depends on the patches: the band, plus 3 sigma for ML.
+double CandidateRadius(const MergeOptions& options);
+
 // S §3.3 for one grid point x (relative to the patches' origin): the maximum-likelihood distance
-// with its sign. False when no patch lies within `band` of x. `scratch` avoids reallocations.
+// with its sign. `candidates` must hold (ascending) every patch within CandidateRadius of x, e.g.
+// from RangePatches::Candidates; others in it are ignored. False when no patch lies within the band.
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                               std::vector<int>* scratch, float* distance);
+                               const std::vector<int>& candidates, float* distance);
 
 // Curless–Levoy: weighted average over scans of the distance along each scanner's line of sight
-// from x to the plane of that scan's nearest patch, truncated to the band. Returns the total weight.
+// from x to that scan's surface (its range image, or the plane of its nearest patch for scans
+// without angles), truncated to the band; only scans with a patch within the band count.
+// `candidates` as above. Returns the total weight.
 float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                   std::vector<int>* scratch, float* distance);
+                   const std::vector<int>& candidates, float* distance);
 
 }  // namespace scanreg::merge

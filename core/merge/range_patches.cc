@@ -222,8 +222,7 @@ void RangePatches::Candidates(const Eigen::Vector3f& x, double radius_m, std::ve
         const auto it = hash.find(BlockKey{i, j, k});
         if (it == hash.end()) continue;
         for (int p : it->second) {
-          const float reach = float(radius_m) + radius[p];
-          if ((centroid[p] - x).squaredNorm() <= reach * reach) out->push_back(p);
+          if (Reaches(p, x, float(radius_m))) out->push_back(p);
         }
       }
     }
@@ -231,6 +230,14 @@ void RangePatches::Candidates(const Eigen::Vector3f& x, double radius_m, std::ve
   if (!single) {  // a patch spanning several visited cells was added once per cell
     std::sort(out->begin(), out->end());
     out->erase(std::unique(out->begin(), out->end()), out->end());
+  }
+}
+
+void RangePatches::Filter(const std::vector<int>& from, const Eigen::Vector3f& x, double radius_m,
+                          std::vector<int>* out) const {
+  out->clear();
+  for (int p : from) {
+    if (Reaches(p, x, float(radius_m))) out->push_back(p);
   }
 }
 

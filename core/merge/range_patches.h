@@ -45,6 +45,14 @@ struct RangePatches {
   // Indices of the patches that may lie within radius_m of x (bounding-sphere test), each once.
   // Patches spanning more than 16^3 hash cells are never returned. Thread-safe.
   void Candidates(const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const;
+  // The patches of `from` whose bounding sphere reaches within radius_m of x, in their order: the
+  // candidates of a point, from those of a larger ball around it (one hash query for many points).
+  void Filter(const std::vector<int>& from, const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const;
+  // Bounding-sphere test: patch p may lie within radius_m of x.
+  bool Reaches(int p, const Eigen::Vector3f& x, float radius_m) const {
+    const float reach = radius_m + radius[p];
+    return (centroid[p] - x).squaredNorm() <= reach * reach;
+  }
   void BuildHash(double cell_m);
 
   std::unordered_map<BlockKey, std::vector<int>, BlockKeyHash> hash;
