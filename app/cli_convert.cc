@@ -3,13 +3,16 @@
 
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
+#include "core/io/e57_reader.h"
 #include "core/io/scan_file.h"
+#include "core/io/text_parse.h"
 
 namespace scanreg::cli {
 
 int RunConvert(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .e57, .ply, .pcd)", argv, {}, &code);
+  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .e57, .ply, .pcd)", argv,
+                          {{"scan", true, true, "NAME     .e57 input: convert only this scan (repeatable)"}}, &code);
   if (!args) return code;
   if (args->positional().size() != 2) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: give an input and an output file"));
@@ -21,7 +24,12 @@ int RunConvert(const std::vector<std::string>& argv) {
   }
   TerminalProgress progress;
   CancelToken cancel;
-  auto scans = io::ReadScanFile(in, progress, cancel);
+  if (args->Has("scan") && io::LowerExtension(in) != ".e57") {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: --scan chooses scans of an .e57 input only"));
+  }
+  io::E57ReadOptions chosen;
+  chosen.names = args->GetAll("scan");
+  auto scans = chosen.names.empty() ? io::ReadScanFile(in, progress, cancel) : io::ReadE57(in, chosen, progress, cancel);
   if (!scans) return Fail(scans.error());
   if (Status s = io::WriteScanFile(out, *scans, progress, cancel); !s) return Fail(s.error());
   std::size_t points = 0;

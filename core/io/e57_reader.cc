@@ -56,8 +56,12 @@ Expected<std::vector<std::size_t>> SelectScans(const std::vector<e57::ScanDesc>&
     bool found = false;
     for (std::size_t i = 0; i < scans.size(); ++i) found = found || ScanName(scans[i], i, scans.size(), path) == name;
     if (!found) {
-      return MakeError(ErrorCode::kNotFound, path.string() + ": no scan named '" + name +
-                                                 "'; list the file's scans to see their names");
+      std::string names;
+      for (std::size_t i = 0; i < scans.size() && i < 20; ++i)
+        names += (i ? ", '" : "'") + ScanName(scans[i], i, scans.size(), path) + "'";
+      if (scans.size() > 20) names += ", ...";
+      return MakeError(ErrorCode::kNotFound,
+                       path.string() + ": no scan named '" + name + "'; the file holds " + names);
     }
   }
   for (std::size_t i = 0; i < scans.size(); ++i) {

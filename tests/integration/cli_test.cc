@@ -131,6 +131,19 @@ TEST(CliTest, ConvertThroughE57KeepsScansGridAndPosesAndFeedsANewProject) {
     EXPECT_LE((got.world_from_scan.matrix() - want.world_from_scan.matrix()).cwiseAbs().maxCoeff(), 1e-9);
   }
 
+  // --scan: only the chosen scan of the E57 file.
+  RunResult one = RunCli("convert " + Quote(dir / "both.e57") + " " + Quote(dir / "one.ptx") + " --scan both_2");
+  ASSERT_EQ(one.status, 0) << one.output;
+  auto second = io::ReadScanFile(dir / "one.ptx", progress, cancel);
+  ASSERT_TRUE(second.ok()) << second.error().ToString();
+  ASSERT_EQ(second->size(), 1u);
+  EXPECT_TRUE((*second)[0].valid == scans[1].valid);
+  EXPECT_LE(((*second)[0].world_from_scan.matrix() - scans[1].world_from_scan.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+  RunResult missing = RunCli("convert " + Quote(dir / "both.e57") + " " + Quote(dir / "x.ptx") + " --scan s09");
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.output.find("no scan named 's09'; the file holds 'both_1', 'both_2'"), std::string::npos)
+      << missing.output;
+
   RunResult created = RunCli("new " + Quote(dir / "e57.scanreg.json") + " " + Quote(dir / "both.e57"));
   ASSERT_EQ(created.status, 0) << created.output;
   Expected<io::Project> project = io::LoadProject(dir / "e57.scanreg.json");
