@@ -148,8 +148,12 @@ int RunRegister(const std::vector<std::string>& argv) {
       "register", "PROJECT.scanreg.json [options]   registers every scan and saves the project", argv,
       {{"root", true, false, "NAME     root scan of the scan order (default: tail of the heaviest edge)"},
        {"parent", true, true, "SCAN=PARENT   register SCAN to PARENT (repeatable; saved in the project)"},
-       {"coarse", true, false, "epnp|3d   coarse method: EPnP on the virtual plane (W) or 3D-3D RANSAC"},
-       {"fine", true, false, "keypoints|dense   fine method: keypoint ICP (W) or dense point-to-plane ICP"},
+       {"coarse", true, false, "epnp|3d|none   coarse method: EPnP on the virtual plane (W), 3D-3D RANSAC, or none: "
+                               "refine from the current poses, linking the scans that overlap there"},
+       {"fine", true, false, "keypoints|dense|em|projective-icp   fine method: keypoint ICP (W), dense point-to-plane "
+                             "ICP, S's EM on the range images, or projective ICP (S's [15])"},
+       {"overlap-distance", true, false, "METRES   a child point this near the parent's surface overlaps (default "
+                                         "0.10; with --coarse none a few times the current pose error)"},
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
        {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
@@ -163,14 +167,23 @@ int RunRegister(const std::vector<std::string>& argv) {
   pipeline::RegisterOptions options;
   const std::string coarse = args->Get("coarse").value_or("3d");
   const std::string fine = args->Get("fine").value_or("dense");
-  if (coarse != "epnp" && coarse != "3d") {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --coarse must be epnp or 3d, not '" + coarse + "'"));
-  }
-  if (fine != "keypoints" && fine != "dense") {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --fine must be keypoints or dense, not '" + fine + "'"));
+  if (coarse != "epnp" && coarse != "3d" && coarse != "none") {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --coarse must be epnp, 3d or none, not '" + coarse + "'"));
   }
   options.coarse.method = coarse == "epnp" ? CoarseMethod::kEpnp : CoarseMethod::k3d;
-  options.fine = fine == "dense" ? pipeline::FineMethod::kDense : pipeline::FineMethod::kKeypoints;
+  options.from_current_poses = coarse == "none";
+  bool fine_known = false;
+  for (pipeline::FineMethod m : {pipeline::FineMethod::kKeypoints, pipeline::FineMethod::kDense, pipeline::FineMethod::kEm,
+                                 pipeline::FineMethod::kProjectiveIcp}) {
+    if (fine == pipeline::FineMethodName(m)) options.fine = m, fine_known = true;
+  }
+  if (!fine_known) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "register: --fine must be keypoints, dense, em or projective-icp, not '" + fine + "'"));
+  }
+  auto overlap_distance = args->GetDouble("overlap-distance", options.overlap_distance_m, 1e-6, 100.0);
+  if (!overlap_distance) return Fail(overlap_distance.error());
+  options.overlap_distance_m = *overlap_distance;
   auto ratio = args->GetDouble("ratio", 0.66, 0.05, 1.0);
   if (!ratio) return Fail(ratio.error());
   options.match.ratio = *ratio;

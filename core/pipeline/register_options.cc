@@ -2,11 +2,20 @@
 
 namespace scanreg::pipeline {
 
-const char* FineMethodName(FineMethod method) { return method == FineMethod::kDense ? "dense" : "keypoints"; }
+const char* FineMethodName(FineMethod method) {
+  switch (method) {
+    case FineMethod::kKeypoints: return "keypoints";
+    case FineMethod::kDense: return "dense";
+    case FineMethod::kEm: return "em";
+    case FineMethod::kProjectiveIcp: return "projective-icp";
+  }
+  return "?";
+}
 const char* CoarseMethodName(CoarseMethod method) { return method == CoarseMethod::kEpnp ? "epnp" : "3d"; }
 
 const std::vector<FineMethod>& AllFineMethods() {
-  static const std::vector<FineMethod> all = {FineMethod::kDense, FineMethod::kKeypoints};
+  static const std::vector<FineMethod> all = {FineMethod::kDense, FineMethod::kKeypoints, FineMethod::kEm,
+                                              FineMethod::kProjectiveIcp};
   return all;
 }
 

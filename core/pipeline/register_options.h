@@ -19,6 +19,8 @@ namespace scanreg::pipeline {
 enum class FineMethod {
   kKeypoints,  // W §2 step 9: ICP on the consistent keypoint 3D points
   kDense,      // point-to-plane ICP on voxel-downsampled full scans, robust kernel
+  kEm,             // S §3.2 on the range images (point-to-plane M-step, core/registration/em_align.h)
+  kProjectiveIcp,  // S's baseline [15]: correspondences along the parent's lines of sight
 };
 const char* FineMethodName(FineMethod method);
 const char* CoarseMethodName(CoarseMethod method);
@@ -61,6 +63,9 @@ struct RegisterOptions {
   // Global registration (issue 4): a pose graph over every accepted link (tree + loop checks),
   // Cauchy kernel, root fixed. Off by default until it measures better than the tree.
   bool global = false;
+  // --coarse none: no features; refine from the scans' current world_from_scan (a .conf file, a
+  // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h).
+  bool from_current_poses = false;
   std::optional<std::string> root;   // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
   Status Validate() const;

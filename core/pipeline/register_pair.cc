@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "core/geometry/transform.h"
+#include "core/pipeline/fine_align.h"
 #include "core/registration/consistency.h"
 #include "core/registration/point_index.h"
 #include "core/registration/surface_distance.h"
@@ -141,11 +142,11 @@ Hypothesis Refine(const PreparedScan& parent, const PreparedScan& child, const s
       h.iterations = icp->iterations;
     }
   } else {
-    NullProgress quiet;
-    Expected<IcpResult> icp = DenseIcpSamples(parent.samples, child.samples, coarse, options.dense_icp, quiet, cancel);
-    if (icp && icp->converged) {
-      h.parent_from_child = icp->parent_from_child;
-      h.iterations = icp->iterations;
+    // Dense ICP must converge to be trusted; EM's evidence below decides (it stops at its cap).
+    Expected<FineResult> fine = AlignFine(parent, child, coarse, options, cancel);
+    if (fine && (fine->converged || options.fine != FineMethod::kDense)) {
+      h.parent_from_child = fine->parent_from_child;
+      h.iterations = fine->iterations;
     }
   }
   h.evidence = EvaluateAlignment(parent, child, h.parent_from_child, options.overlap_distance_m);

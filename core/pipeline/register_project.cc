@@ -13,8 +13,9 @@
 #include "core/geometry/transform.h"
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
+#include "core/pipeline/global_registration.h"
+#include "core/pipeline/refine_project.h"
 #include "core/pipeline/register_pair.h"
-#include "core/registration/pose_graph.h"
 #include "core/registration/scan_order.h"
 
 namespace scanreg::pipeline {
@@ -54,6 +55,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                             const RegisterOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
+  if (options.from_current_poses) return RegisterFromCurrentPoses(scans, parent_override, rejected, options, progress, cancel);
   const int n = static_cast<int>(scans.size());
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
   for (const Scan& s : scans) {
@@ -238,31 +240,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     result.links.push_back(l);
   }
   if (options.global) {
-#ifdef SCANREG_HAVE_POSE_GRAPH
-    std::vector<PoseGraphLink> graph;
-    for (const io::LinkRecord& l : result.links) {
-      if (l.status == io::LinkStatus::kFailed) continue;
-      graph.push_back({IndexOf(scans, l.parent), IndexOf(scans, l.child), l.parent_from_child});
-    }
-    std::vector<Eigen::Isometry3d> initial;
-    for (const ScanRegistration& s : result.scans) initial.push_back(s.world_from_scan);
-    PoseGraphOptions graph_options;
-    graph_options.root = result.root;
-    NullProgress quiet;
-    Expected<PoseGraphResult> solved = OptimizePoseGraph(initial, graph, graph_options, quiet, cancel);
-    if (!solved) return solved.error();
-    for (int i = 0; i < n; ++i)
-      if (result.scans[i].registered) result.scans[i].world_from_scan = solved->world_from_scan[i];
-    for (const PoseGraphLinkReport& r : solved->links) {
-      result.global_links.push_back({scans[r.parent].name, scans[r.child].name, r.translation_before_m,
-                                     r.rotation_before_rad, r.translation_after_m, r.rotation_after_rad, r.weight,
-                                     r.down_weighted});
-      if (r.down_weighted) LogWarning("global registration down-weighted link " + scans[r.child].name + " -> " +
-                                      scans[r.parent].name);
-    }
-#else
-    return MakeError(ErrorCode::kUnsupported, "global registration needs Ceres: this scanreg was built without it");
-#endif
+    if (Status g = RunGlobalRegistration(scans, cancel, &result); !g) return g.error();
   }
   // Failed attempts, and the reason of each scan left out.
   for (const auto& [key, pr] : done) {

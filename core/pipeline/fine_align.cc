@@ -1,0 +1,54 @@
+#include "core/pipeline/fine_align.h"
+
+#include <algorithm>
+
+#include "core/pipeline/register_pair.h"
+#include "core/registration/icp.h"
+
+namespace scanreg::pipeline {
+
+EmOptions PipelineEmOptions(const RegisterOptions& options, const Scan& child) {
+  EmOptions o;
+  o.method = options.fine == FineMethod::kProjectiveIcp ? EmOptions::Method::kProjectiveIcp : EmOptions::Method::kEm;
+  o.sigma_m = std::max(options.range_sigma_m, 1e-6);
+  o.max_correspondence_m = options.overlap_distance_m;
+  o.outlier_mad_factor = 3.0;  // occlusions (measured on the Stanford bunny: bench_em.cc)
+  o.subsample = std::max<int>(1, static_cast<int>(child.CountValid() / 10000));
+  o.max_iterations = 100;
+  o.convergence_translation_m = 1e-3 * o.sigma_m;
+  return o;
+}
+
+Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& child,
+                               const Eigen::Isometry3d& initial, const RegisterOptions& options,
+                               const CancelToken& cancel) {
+  NullProgress quiet;
+  FineResult out;
+  switch (options.fine) {
+    case FineMethod::kKeypoints:
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "fine method 'keypoints' needs feature matches; use em, projective-icp or dense");
+    case FineMethod::kDense: {
+      Expected<IcpResult> icp = DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
+      if (!icp) return icp.error();
+      out.parent_from_child = icp->parent_from_child;
+      out.iterations = icp->iterations;
+      out.converged = icp->converged;
+      return out;
+    }
+    case FineMethod::kEm:
+    case FineMethod::kProjectiveIcp: {
+      const EmOptions em = PipelineEmOptions(options, *child.scan);
+      Expected<EmResult> r = AlignEm(*parent.scan, *child.scan, initial, em, quiet, cancel);
+      if (!r) return MakeError(r.error().code, EmMethodName(em) + " of '" + child.scan->name + "' to '" +
+                                                   parent.scan->name + "': " + r.error().message);
+      out.parent_from_child = r->parent_from_child;
+      out.iterations = r->iterations;
+      out.converged = r->converged;
+      return out;
+    }
+  }
+  return MakeError(ErrorCode::kInvalidArgument, "unknown fine method");
+}
+
+}  // namespace scanreg::pipeline

@@ -1,0 +1,254 @@
+#include "core/pipeline/refine_project.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+
+#include "core/common/log.h"
+#include "core/pipeline/fine_align.h"
+#include "core/pipeline/global_registration.h"
+#include "core/pipeline/register_pair.h"
+#include "core/registration/point_index.h"
+#include "core/registration/scan_order.h"
+#include "core/registration/voxel_filter.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    if (scans[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// The fine step's scale follows the overlap distance: poses are already close.
+RegisterOptions ScaledOptions(RegisterOptions o) {
+  const double d = o.overlap_distance_m;
+  o.dense_icp.voxel_m = std::min(o.dense_icp.voxel_m, 0.5 * d);
+  o.dense_icp.max_correspondence_schedule_m = {d, 0.5 * d, 0.25 * d};
+  return o;
+}
+
+// Fraction of the child's samples (at most 2,000, evenly) with a parent sample within d.
+double Overlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
+               const Eigen::Isometry3d& parent_from_child, double d) {
+  const std::vector<Eigen::Vector3d> pts = ThinEvenly(child_samples, 2000);
+  if (pts.empty()) return 0.0;
+  int near = 0;
+  for (const Eigen::Vector3d& p : pts) near += parent.Nearest(parent_from_child * p, d) >= 0;
+  return double(near) / double(pts.size());
+}
+
+std::string Format(const char* fmt, double a, double b) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, fmt, a, b);
+  return buf;
+}
+
+// Refines one pair from the current poses and classifies it from the shared evidence.
+io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& initial,
+                          const RegisterOptions& options, const CancelToken& cancel) {
+  const auto t0 = std::chrono::steady_clock::now();
+  io::LinkRecord link;
+  link.parent = parent.scan->name;
+  link.child = child.scan->name;
+  link.method = std::string("none+") + FineMethodName(options.fine);
+  link.parent_from_child = initial;
+  Expected<FineResult> fine = AlignFine(parent, child, initial, options, cancel);
+  if (!fine) {
+    link.status = io::LinkStatus::kFailed;
+    link.reason = fine.error().message;
+  } else {
+    link.parent_from_child = fine->parent_from_child;
+    link.iterations = fine->iterations;
+    const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, options.overlap_distance_m);
+    link.overlap = e.overlap;
+    link.rms_m = e.rms_m;
+    link.conflict = e.conflict;
+    const LinkThresholds& t = options.thresholds;
+    link.status = io::LinkStatus::kOk;
+    if (e.overlap < t.min_overlap) {
+      link.status = io::LinkStatus::kFailed;
+      link.reason = Format("overlap %.1f %% after refinement is below %.1f %%", 100 * e.overlap, 100 * t.min_overlap);
+    } else if (e.conflict > t.max_conflict) {
+      link.status = io::LinkStatus::kFailed;
+      link.reason = Format("%.1f %% of the points lie in the other scanner's free space (maximum %.1f %%)",
+                           100 * e.conflict, 100 * t.max_conflict);
+    } else if (e.rms_m > t.max_rms_m) {
+      link.status = io::LinkStatus::kFailed;
+      link.reason = Format("RMS %.1f mm over the overlap exceeds %.1f mm", 1000 * e.rms_m, 1000 * t.max_rms_m);
+    } else if (e.overlap < t.weak_overlap) {
+      link.status = io::LinkStatus::kWeak;
+      link.reason = Format("small overlap (%.1f %%)", 100 * e.overlap, 0);
+    } else if (!fine->converged) {
+      link.status = io::LinkStatus::kWeak;
+      link.reason = "the fine step stopped at its iteration cap before converging";
+    }
+  }
+  if (cancel.IsCancelled()) {
+    link.status = io::LinkStatus::kFailed;
+    link.reason = "cancelled";
+  }
+  link.seconds = Since(t0);
+  return link;
+}
+
+}  // namespace
+
+Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans,
+                                                       const std::vector<std::optional<std::string>>& parent_override,
+                                                       const std::vector<std::pair<std::string, std::string>>& rejected,
+                                                       const RegisterOptions& raw_options, ProgressSink& progress,
+                                                       const CancelToken& cancel) {
+  if (Status s = raw_options.Validate(); !s) return s.error();
+  if (raw_options.fine == FineMethod::kKeypoints) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "--coarse none has no feature matches for --fine keypoints; use --fine em, projective-icp or dense");
+  }
+  const RegisterOptions options = ScaledOptions(raw_options);
+  const int n = static_cast<int>(scans.size());
+  if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
+  const auto t_start = std::chrono::steady_clock::now();
+  ProjectRegistration result;
+
+  // Voxel samples of every scan, their indices, and the directed overlap at the current poses.
+  std::vector<PreparedScan> prepared(n);
+  std::vector<std::unique_ptr<PointIndex>> index(n);
+  for (int i = 0; i < n; ++i) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+    std::vector<Eigen::Vector3d> pts;
+    for (std::size_t k = 0; k < scans[i].size(); ++k)
+      if (scans[i].valid[k]) pts.push_back(scans[i].points[k].cast<double>());
+    if (pts.empty()) return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
+    prepared[i].scan = &scans[i];
+    prepared[i].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
+    index[i] = std::make_unique<PointIndex>(prepared[i].samples);
+  }
+  result.seconds_features = Since(t_start);
+  const auto t_overlap = std::chrono::steady_clock::now();
+  Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);
+  result.confusion = Eigen::MatrixXi::Zero(n, n);  // overlap in per mille: the scan order's edge weights
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if (i == j) continue;
+      const Eigen::Isometry3d rel = scans[i].world_from_scan.inverse() * scans[j].world_from_scan;
+      overlap(i, j) = Overlap(*index[i], prepared[j].samples, rel, options.overlap_distance_m);
+      result.confusion(i, j) = static_cast<int>(std::lround(1000 * overlap(i, j)));
+    }
+  result.seconds_matching = Since(t_overlap);
+
+  std::optional<int> root;
+  if (options.root) {
+    root = IndexOf(scans, *options.root);
+    if (*root < 0) return MakeError(ErrorCode::kInvalidArgument, "root scan '" + *options.root + "' is not in the project");
+  }
+  std::vector<std::optional<int>> overrides(n);
+  for (int i = 0; i < n && i < static_cast<int>(parent_override.size()); ++i) {
+    if (!parent_override[i]) continue;
+    overrides[i] = IndexOf(scans, *parent_override[i]);
+    if (*overrides[i] < 0) {
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "': parent override '" +
+                                                        *parent_override[i] + "' is not in the project");
+    }
+  }
+  std::vector<std::pair<int, int>> excluded;
+  for (const auto& [p, c] : rejected) {
+    const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
+    if (pi >= 0 && ci >= 0) excluded.emplace_back(pi, ci);
+  }
+  const int min_weight = std::max(1, static_cast<int>(std::lround(1000 * options.thresholds.min_overlap)));
+
+  // Refine along the maximum-overlap tree; a failed link is excluded and the tree recomputed.
+  const auto t_pairs = std::chrono::steady_clock::now();
+  std::map<std::pair<int, int>, io::LinkRecord> done;
+  auto link = [&](int parent, int child) -> const io::LinkRecord& {
+    auto it = done.find({parent, child});
+    if (it != done.end()) return it->second;
+    progress.Report(0.05 + 0.9 * std::min(1.0, done.size() / (2.0 * n)),
+                    "refining " + scans[child].name + " to " + scans[parent].name);
+    const Eigen::Isometry3d initial = scans[parent].world_from_scan.inverse() * scans[child].world_from_scan;
+    io::LinkRecord l = RefinePair(prepared[parent], prepared[child], initial, options, cancel);
+    LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(l.status) +
+            (l.reason.empty() ? "" : " (" + l.reason + ")"));
+    return done.emplace(std::make_pair(parent, child), std::move(l)).first->second;
+  };
+  ScanOrder order;
+  for (int round = 0; round <= n * n; ++round) {
+    Expected<ScanOrder> o = ComputeScanOrder(result.confusion, root, overrides, excluded, min_weight);
+    if (!o) return o.error();
+    order = *o;
+    bool changed = false;
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+      if (link(parent, child).status == io::LinkStatus::kFailed) {
+        excluded.emplace_back(parent, child);
+        changed = true;
+        break;
+      }
+    }
+    if (!changed) break;
+  }
+
+  // World poses chained from the root, which keeps its current pose.
+  result.root = order.root;
+  result.scans.resize(n);
+  for (int i = 0; i < n; ++i) {
+    result.scans[i].name = scans[i].name;
+    result.scans[i].reason = Format("no scan overlaps it by %.0f %% within %.3f m at the current poses",
+                                    100 * options.thresholds.min_overlap, options.overlap_distance_m);
+  }
+  ScanRegistration& r0 = result.scans[order.root];
+  r0.registered = true;
+  r0.reason.clear();
+  r0.world_from_scan = scans[order.root].world_from_scan;
+  for (int child : order.order) {
+    const int parent = order.parent[child];
+    if (parent < 0) continue;
+    const io::LinkRecord& l = done.at({parent, child});
+    ScanRegistration& s = result.scans[child];
+    s.registered = true;
+    s.reason.clear();
+    s.parent = parent;
+    s.world_from_scan = result.scans[parent].world_from_scan * l.parent_from_child;
+    result.links.push_back(l);
+  }
+  // Global: every other overlapping pair becomes a link, then the pose graph.
+  if (options.global) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        if (order.parent[j] == i || order.parent[i] == j) continue;
+        if (!result.scans[i].registered || !result.scans[j].registered) continue;
+        if (std::max(overlap(i, j), overlap(j, i)) < options.thresholds.weak_overlap) continue;
+        if (std::find(excluded.begin(), excluded.end(), std::make_pair(i, j)) != excluded.end()) continue;
+        if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+        const bool i_parent = overlap(i, j) >= overlap(j, i);
+        io::LinkRecord l = i_parent ? link(i, j) : link(j, i);
+        if (l.status == io::LinkStatus::kFailed) continue;
+        l.loop_check = true;
+        result.links.push_back(l);
+      }
+    if (Status g = RunGlobalRegistration(scans, cancel, &result); !g) return g.error();
+  }
+  for (const auto& [key, l] : done) {
+    if (l.status != io::LinkStatus::kFailed) continue;
+    result.links.push_back(l);
+    ScanRegistration& s = result.scans[key.second];
+    if (!s.registered) s.reason = "link to " + scans[key.first].name + " failed: " + l.reason;
+  }
+  result.seconds_pairs = Since(t_pairs);
+  result.seconds_total = Since(t_start);
+  progress.Report(1.0, "registration done");
+  return result;
+}
+
+}  // namespace scanreg::pipeline
