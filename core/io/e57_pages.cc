@@ -134,7 +134,7 @@ Expected<PagedReader> PagedReader::Open(const std::filesystem::path& path) {
 }
 
 Status PagedReader::Read(std::uint64_t physical_offset, std::uint64_t n, const std::string& what, std::string* out) {
-  const std::uint64_t logical_end_of_file = header_.file_physical_length / kPageSize * kPageData;
+  const std::uint64_t logical_end_of_file = logical_length();
   const std::uint64_t begin = LogicalFromPhysical(physical_offset);
   if (physical_offset % kPageSize >= kPageData || begin > logical_end_of_file || n > logical_end_of_file - begin) {
     return Damaged(source_, what + " (physical offset " + std::to_string(physical_offset) + ", " + std::to_string(n) +

@@ -46,6 +46,8 @@ class PagedReader {
   static Expected<PagedReader> Open(const std::filesystem::path& path);
 
   const FileHeader& header() const { return header_; }
+  // Logical bytes in the file (the pages without their checksums).
+  std::uint64_t logical_length() const { return header_.file_physical_length / kPageSize * kPageData; }
   // n logical bytes starting at a physical offset; `what` names the data in error messages.
   Status Read(std::uint64_t physical_offset, std::uint64_t n, const std::string& what, std::string* out);
   // The XML section, as text.

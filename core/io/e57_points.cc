@@ -222,11 +222,13 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
     return s.error();
   const std::uint64_t section_length = LoadU64(header.data() + 8);
   const std::uint64_t data_offset = LoadU64(header.data() + 16);
-  if (static_cast<std::uint8_t>(header[0]) != kCompressedVectorSection || section_length < kSectionHeaderSize) {
-    return MakeError(ErrorCode::kParseError, where + ": the points fileOffset does not point at a CompressedVector "
-                                                     "section; the file is damaged");
-  }
   const std::uint64_t section_start = LogicalFromPhysical(scan.points_offset);
+  if (static_cast<std::uint8_t>(header[0]) != kCompressedVectorSection || section_length < kSectionHeaderSize ||
+      section_length > file.logical_length() - section_start) {
+    return MakeError(ErrorCode::kParseError, where + ": the points fileOffset " + std::to_string(scan.points_offset) +
+                                                     " does not hold a valid CompressedVector section (wrong id or a "
+                                                     "length beyond the file); the file is damaged");
+  }
   const std::uint64_t data_start = LogicalFromPhysical(data_offset) - section_start;
   if (data_offset % kPageSize >= kPageData || LogicalFromPhysical(data_offset) < section_start + kSectionHeaderSize ||
       data_start >= section_length) {
@@ -235,8 +237,8 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
   }
   std::uint64_t bits_per_record = 0;
   for (const Field& f : scan.fields) bits_per_record += std::uint64_t(f.bits);
-  const std::uint64_t capacity =
-      bits_per_record == 0 ? std::uint64_t(1) << 32 : (section_length - data_start) * 8 / bits_per_record;
+  // A prototype of constants only (0 bits a record) stores nothing: no real scan, refuse it.
+  const std::uint64_t capacity = bits_per_record == 0 ? 0 : (section_length - data_start) * 8 / bits_per_record;
   if (scan.record_count > capacity) {
     return MakeError(ErrorCode::kParseError,
                      where + ": recordCount " + std::to_string(scan.record_count) + " is more than the points section (" +
