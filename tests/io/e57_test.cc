@@ -137,6 +137,21 @@ TEST(E57, ListsScansAndReadsChosenOnes) {
   EXPECT_FALSE(ReadE57(dir / "two.e57", by_index, progress, cancel).ok());
 }
 
+TEST(E57, ScanWithoutValidPointKeepsItsGrid) {
+  TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const std::vector<Scan> scans = {Scan("empty", 5, 7), MakeRoomScan(12, 20, "room")};
+  ASSERT_TRUE(WriteE57(dir / "a.e57", scans, progress, cancel).ok());
+  Expected<std::vector<Scan>> back = ReadE57(dir / "a.e57", {}, progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  ASSERT_EQ(back->size(), 2u);
+  EXPECT_EQ((*back)[0].rows, 5);
+  EXPECT_EQ((*back)[0].cols, 7);
+  EXPECT_EQ((*back)[0].CountValid(), 0u);
+  EXPECT_EQ((*back)[1].CountValid(), scans[1].CountValid());
+}
+
 TEST(E57, CancelStopsReadingAndWriting) {
   TempDir dir;
   NullProgress progress;
