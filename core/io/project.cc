@@ -95,20 +95,27 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
   return l;
 }
 
-// Rows of non-negative integers, scans x scans.
-Expected<Eigen::MatrixXi> ConfusionFromJson(const json& j, std::size_t scans, const std::string& where) {
-  const std::string bad = where + ": 'confusion' must be " + std::to_string(scans) + " rows of " +
-                          std::to_string(scans) + " non-negative integers (one per scan); delete it and register again";
-  if (!j.is_array() || j.size() != scans) return MakeError(ErrorCode::kParseError, bad);
-  Eigen::MatrixXi c(scans, scans);
-  for (std::size_t i = 0; i < scans; ++i) {
-    if (!j[i].is_array() || j[i].size() != scans) return MakeError(ErrorCode::kParseError, bad);
-    for (std::size_t k = 0; k < scans; ++k) {
-      if (!j[i][k].is_number_integer() || j[i][k].get<long long>() < 0) return MakeError(ErrorCode::kParseError, bad);
-      c(i, k) = j[i][k].get<int>();
+// {"scans": [names], "matches": [[counts]]}: one row of non-negative integers per named scan.
+Status ConfusionFromJson(const json& j, const std::string& where, Project* project) {
+  const Error bad = MakeError(ErrorCode::kParseError,
+                              where + ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
+                                      "non-negative integers per scan); delete it and register again");
+  if (!j.is_object() || !j.contains("scans") || !j.contains("matches")) return bad;
+  const json& names = j["scans"];
+  const json& rows = j["matches"];
+  if (!names.is_array() || !rows.is_array() || rows.size() != names.size()) return bad;
+  const std::size_t n = names.size();
+  Eigen::MatrixXi c(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!names[i].is_string() || !rows[i].is_array() || rows[i].size() != n) return bad;
+    project->confusion_scans.push_back(names[i].get<std::string>());
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!rows[i][k].is_number_integer() || rows[i][k].get<long long>() < 0) return bad;
+      c(i, k) = rows[i][k].get<int>();
     }
   }
-  return c;
+  project->confusion = std::move(c);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -126,6 +133,14 @@ int Project::FindScan(const std::string& name) const {
   for (std::size_t i = 0; i < scans.size(); ++i)
     if (scans[i].name == name) return static_cast<int>(i);
   return -1;
+}
+
+const Eigen::MatrixXi* Project::CurrentConfusion() const {
+  const auto n = static_cast<Eigen::Index>(scans.size());
+  if (confusion.rows() != n || confusion.cols() != n || confusion_scans.size() != scans.size() || n == 0) return nullptr;
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    if (confusion_scans[i] != scans[i].name) return nullptr;
+  return &confusion;
 }
 
 Expected<Project> LoadProject(const std::filesystem::path& path) {
@@ -205,9 +220,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       }
     }
     if (j.contains("confusion")) {
-      auto confusion = ConfusionFromJson(j["confusion"], project.scans.size(), where);
-      if (!confusion) return confusion.error();
-      project.confusion = std::move(*confusion);
+      if (Status s = ConfusionFromJson(j["confusion"], where, &project); !s) return s.error();
     }
     if (j.contains("settings")) {
       for (auto it = j["settings"].begin(); it != j["settings"].end(); ++it)
@@ -245,14 +258,14 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
          {"links", std::move(links)},
          {"settings", project.settings}};
   j["root"] = project.root ? json(*project.root) : json(nullptr);
-  if (project.confusion.size() > 0) {
+  if (const Eigen::MatrixXi* confusion = project.CurrentConfusion()) {
     json rows = json::array();
-    for (int i = 0; i < project.confusion.rows(); ++i) {
+    for (int i = 0; i < confusion->rows(); ++i) {
       json row = json::array();
-      for (int k = 0; k < project.confusion.cols(); ++k) row.push_back(project.confusion(i, k));
+      for (int k = 0; k < confusion->cols(); ++k) row.push_back((*confusion)(i, k));
       rows.push_back(std::move(row));
     }
-    j["confusion"] = std::move(rows);
+    j["confusion"] = json{{"scans", project.confusion_scans}, {"matches", std::move(rows)}};
   }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;

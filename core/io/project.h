@@ -62,12 +62,16 @@ struct Project {
   std::vector<LinkRecord> links;
   std::optional<std::string> root;                // root scan of the scan order
   std::map<std::string, std::string> settings;    // option name -> value, as the user set them
-  // Confusion matrix C(i, j) of the last registration (W §2 step 3), in scan order; empty when the
-  // project has not been registered. Optional in the file; must be scans x scans when present.
+  // Confusion matrix C(i, j) of the last registration (W §2 step 3) and the names of the scans of
+  // its rows and columns; empty when the project has not been registered. Optional in the file.
   Eigen::MatrixXi confusion;
+  std::vector<std::string> confusion_scans;
 
   // Index of the scan with this name, or -1.
   int FindScan(const std::string& name) const;
+  // The confusion matrix while it still describes the project's scans in order; nullptr when there
+  // is none or scans were added, removed or reordered since (register again).
+  const Eigen::MatrixXi* CurrentConfusion() const;
 };
 
 // Reads and checks a project file: schema version, unique scan names, every scan file present

@@ -107,14 +107,15 @@ std::string SummarySection(const io::Project& p) {
 
 std::string ConfusionSection(const io::Project& p, const std::filesystem::path& dir, Status* status) {
   std::string html = "<h2 id=\"confusion\">Confusion matrix</h2>\n";
-  if (p.confusion.size() == 0) {
+  const Eigen::MatrixXi* confusion = p.CurrentConfusion();
+  if (!confusion) {
     return html +
-           "<p>Not available: the project has not been registered with this scanreg version (the matrix is "
+           "<p>Not available: the project has not been registered since its scans last changed (the matrix is "
            "stored by <code>scanreg-cli register</code>).</p>\n";
   }
   std::vector<std::string> names;
   for (const io::ProjectScan& s : p.scans) names.push_back(s.name);
-  *status = WritePng(DrawConfusionHeatMap(p.confusion, names), dir / kConfusionPng);
+  *status = WritePng(DrawConfusionHeatMap(*confusion, names), dir / kConfusionPng);
   return html +
          "<p>C(i, j): matches of scan i's SIFT features in scan j (ratio test, W §2 step 3); diagonal: "
          "features of scan i. Rows and columns in scan order.</p>\n" +

@@ -105,9 +105,10 @@ TEST(Report, RegisteredProjectShowsItsEvidenceAndTheErrorsAgainstTheTruth) {
   ASSERT_TRUE(loaded.ok()) << loaded.error().ToString();
 
   // The saved project keeps what the report needs: the confusion matrix and the coarse poses.
-  ASSERT_EQ(loaded->confusion.rows(), 3);
-  EXPECT_TRUE(loaded->confusion == result->confusion);
-  EXPECT_GT(loaded->confusion(0, 1), 0);
+  ASSERT_NE(loaded->CurrentConfusion(), nullptr);
+  ASSERT_EQ(loaded->CurrentConfusion()->rows(), 3);
+  EXPECT_TRUE(*loaded->CurrentConfusion() == result->confusion);
+  EXPECT_GT(result->confusion(0, 1), 0);
   ASSERT_FALSE(loaded->scans[2].registered);
   EXPECT_FALSE(loaded->scans[2].unregistered_reason.empty());
   const std::vector<pipeline::ReferenceError> saved = pipeline::ReferenceErrors(*loaded);
