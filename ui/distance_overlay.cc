@@ -75,19 +75,26 @@ DistanceOverlay MakeDistanceOverlay(const pipeline::PairInspection& pair, double
   overlay.clouds.push_back(Cloud(pair.child_points, pair.child_distance_m, lut));
   overlay.legend = vtkSmartPointer<vtkScalarBarActor>::New();
   overlay.legend->SetLookupTable(lut);
-  overlay.legend->SetTitle("distance to the\nother scan (mm)");
+  overlay.legend->SetTitle("Distance (mm)");  // of each point to the other scan's surface
   overlay.legend->SetNumberOfLabels(6);
   overlay.legend->SetLabelFormat("%.0f");
-  overlay.legend->SetMaximumWidthInPixels(90);
-  overlay.legend->SetPosition(0.88, 0.08);
-  overlay.legend->SetWidth(0.10);
-  overlay.legend->SetHeight(0.6);
+  overlay.legend->SetMaximumWidthInPixels(110);
+  overlay.legend->SetBarRatio(0.25);
+  overlay.legend->SetPosition(0.86, 0.10);
+  overlay.legend->SetWidth(0.12);
+  overlay.legend->SetHeight(0.55);
   overlay.legend->DrawBelowRangeSwatchOn();
   overlay.legend->SetBelowRangeAnnotation("outside overlap");
-  overlay.legend->GetTitleTextProperty()->SetFontSize(12);
-  overlay.legend->GetTitleTextProperty()->ItalicOff();
-  overlay.legend->GetLabelTextProperty()->SetFontSize(11);
-  overlay.legend->GetLabelTextProperty()->ItalicOff();
+  overlay.legend->UnconstrainedFontSizeOn();  // the fonts below, not scaled with the bar
+  overlay.legend->SetTextPad(4);
+  for (vtkTextProperty* text : {overlay.legend->GetTitleTextProperty(), overlay.legend->GetLabelTextProperty(),
+                                overlay.legend->GetAnnotationTextProperty()}) {
+    text->SetFontSize(13);
+    text->ItalicOff();
+    text->BoldOff();
+    text->ShadowOff();
+    text->SetColor(0.92, 0.92, 0.92);
+  }
   return overlay;
 }
 

@@ -77,11 +77,17 @@ class NetworkClicks : public QObject {
 PairInspector::PairInspector(MainWindow* window) : QObject(window), window_(window) {
   panorama_ = new PanoramaView(window);
   panel_ = new PairPanel(window);
+  // The panorama beside the log along the bottom, wide (panoramas are 4:1); the pair panel on the left.
   auto* pano_dock = new QDockWidget(tr("Panorama"), window);
   pano_dock->setObjectName("PanoramaViewDock");
   pano_dock->setWidget(panorama_);
   window->addDockWidget(Qt::BottomDockWidgetArea, pano_dock);
-  auto* pair_dock = new QDockWidget(tr("Pair"), window);
+  if (auto* log = window->findChild<QDockWidget*>("LogDock")) {
+    window->splitDockWidget(log, pano_dock, Qt::Horizontal);
+    window->resizeDocks({log, pano_dock}, {1, 3}, Qt::Horizontal);
+  }
+  pano_dock_ = pano_dock;
+  auto* pair_dock = new QDockWidget(tr("Pair registration"), window);
   pair_dock->setObjectName("PairPanelDock");
   pair_dock->setWidget(panel_);
   window->addDockWidget(Qt::LeftDockWidgetArea, pair_dock);
@@ -240,6 +246,9 @@ void PairInspector::OnJobSucceeded(const QString& title, const std::any& result)
       panel_->SetRunning(false);
       panel_->ShowResult(pair->inspection);
       panorama_->ShowPair(pair->parent, pair->child, pair->inspection.matches, pair->inspection.coarse_inlier);
+      // Two stacked panoramas need height: grow a low panorama dock once (the user's layout wins after).
+      if (!grew_panorama_ && pano_dock_->height() < 300) window_->resizeDocks({pano_dock_}, {360}, Qt::Vertical);
+      grew_panorama_ = true;
       ShowOverlay();
     }
   }

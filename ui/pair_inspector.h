@@ -16,6 +16,8 @@
 #include "core/pipeline/inspect_pair.h"
 #include "ui/panorama_view.h"
 
+class QDockWidget;
+
 namespace scanreg::ui {
 
 class MainWindow;
@@ -53,6 +55,8 @@ class PairInspector : public QObject {
   MainWindow* window_;
   PanoramaView* panorama_ = nullptr;
   PairPanel* panel_ = nullptr;
+  QDockWidget* pano_dock_ = nullptr;
+  bool grew_panorama_ = false;
   std::map<QString, PanoramaImage> panoramas_;  // computed panoramas by scan name (this project)
   const void* scans_identity_ = nullptr;        // the window's scans these panoramas belong to
   std::optional<pipeline::PairInspection> last_pair_;

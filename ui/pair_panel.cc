@@ -22,6 +22,7 @@ QString ErrorText(const PoseError& e) {
 
 PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
   setObjectName("PairPanel");
+  setMinimumWidth(340);  // evidence values on one line
   parent_ = new QComboBox(this);
   parent_->setObjectName("PairParent");
   child_ = new QComboBox(this);

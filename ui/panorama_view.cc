@@ -130,7 +130,9 @@ void PanoramaView::ShowPair(const PanoramaImage& parent, const PanoramaImage& ch
   auto* b = scene_->addSimpleText(tr("%1 (child)").arg(child.scan));
   b->setBrush(label_colour);
   b->setPos(4, y_child - 20);
-  const QPen inlier_pen(QColor(40, 220, 80), 0), outlier_pen(QColor(230, 50, 40, 140), 0);
+  // Cosmetic pens: the same width on screen at any zoom.
+  QPen inlier_pen(QColor(40, 230, 90), 2), outlier_pen(QColor(235, 60, 45, 110), 0);
+  inlier_pen.setCosmetic(true);
   int inliers = 0;
   for (std::size_t i = 0; i < matches.size(); ++i) {
     const FeatureMatch& m = matches[i];

@@ -1,0 +1,109 @@
+#include "core/pipeline/apply_pair_result.h"
+
+#include <gtest/gtest.h>
+
+namespace scanreg::pipeline {
+namespace {
+
+Eigen::Isometry3d Pose(double x, double y, double yaw) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  t.translation() = Eigen::Vector3d(x, y, 0.1);
+  return t;
+}
+
+io::LinkRecord Link(const io::Project& p, const std::string& parent, const std::string& child) {
+  io::LinkRecord l;
+  l.parent = parent;
+  l.child = child;
+  l.status = io::LinkStatus::kOk;
+  l.parent_from_child = p.scans[p.FindScan(parent)].world_from_scan.inverse() * p.scans[p.FindScan(child)].world_from_scan;
+  return l;
+}
+
+// s1 (root) -> s2 -> s3, s1 -> s4; s5 unregistered.
+io::Project Tree() {
+  io::Project p;
+  const Eigen::Isometry3d poses[] = {Pose(0, 0, 0), Pose(5, 0, 0.1), Pose(10, 1, 0.2), Pose(0, 6, -0.3), Pose(3, 3, 0)};
+  for (int i = 0; i < 5; ++i) {
+    io::ProjectScan s;
+    s.name = "s" + std::to_string(i + 1);
+    s.world_from_scan = poses[i];
+    s.registered = i < 4;
+    p.scans.push_back(s);
+  }
+  p.root = "s1";
+  p.links = {Link(p, "s1", "s2"), Link(p, "s2", "s3"), Link(p, "s1", "s4")};
+  io::LinkRecord failed = Link(p, "s4", "s3");
+  failed.status = io::LinkStatus::kFailed;
+  p.links.push_back(failed);
+  return p;
+}
+
+TEST(ApplyPairResult, MovesTheChildAndTheScansRegisteredThroughIt) {
+  io::Project p = Tree();
+  const io::Project before = p;
+  io::LinkRecord link = Link(p, "s4", "s2");
+  link.parent_from_child = link.parent_from_child * Pose(0.05, -0.02, 0.01);  // the new result differs
+  link.method = "epnp+keypoints";
+  ASSERT_TRUE(ApplyPairResult(link, p).ok());
+  const Eigen::Isometry3d s2 = p.scans[3].world_from_scan * link.parent_from_child;
+  EXPECT_TRUE(p.scans[1].world_from_scan.isApprox(s2, 1e-12));
+  // s3 keeps its pose relative to s2; s1, s4 and the unregistered s5 stay.
+  const Eigen::Isometry3d rel_before = before.scans[1].world_from_scan.inverse() * before.scans[2].world_from_scan;
+  EXPECT_TRUE((p.scans[1].world_from_scan.inverse() * p.scans[2].world_from_scan).isApprox(rel_before, 1e-12));
+  for (int i : {0, 3, 4}) EXPECT_TRUE(p.scans[i].world_from_scan.isApprox(before.scans[i].world_from_scan, 0.0));
+  EXPECT_FALSE(p.scans[4].registered);
+  // The new link replaces s2's tree link; the parent changed, so it is kept as an override.
+  int into_s2 = 0;
+  for (const io::LinkRecord& l : p.links) into_s2 += l.child == "s2";
+  EXPECT_EQ(into_s2, 1);
+  EXPECT_EQ(p.links.back().parent, "s4");
+  EXPECT_EQ(p.links.back().method, "epnp+keypoints");
+  EXPECT_EQ(p.scans[1].parent_override.value_or(""), "s4");
+  EXPECT_EQ(p.links.size(), before.links.size());  // the failed attempt s4 -> s3 is kept
+}
+
+TEST(ApplyPairResult, SameParentReplacesTheLinkWithoutAnOverride) {
+  io::Project p = Tree();
+  io::LinkRecord link = Link(p, "s1", "s2");
+  link.status = io::LinkStatus::kWeak;
+  link.parent_from_child.translation().x() += 0.1;
+  ASSERT_TRUE(ApplyPairResult(link, p).ok());
+  EXPECT_FALSE(p.scans[1].parent_override.has_value());
+  EXPECT_NEAR(p.scans[1].world_from_scan.translation().x(), 5.1, 1e-12);
+  EXPECT_TRUE(p.links.back().user_accepted);  // a weak result the user chose is accepted
+}
+
+TEST(ApplyPairResult, RegistersAnUnregisteredChild) {
+  io::Project p = Tree();
+  io::LinkRecord link = Link(p, "s4", "s5");
+  ASSERT_TRUE(ApplyPairResult(link, p).ok());
+  EXPECT_TRUE(p.scans[4].registered);
+  EXPECT_TRUE(p.scans[4].world_from_scan.isApprox(Pose(3, 3, 0), 1e-12));
+}
+
+TEST(ApplyPairResult, RefusesCyclesFailedLinksAndUnregisteredParents) {
+  io::Project p = Tree();
+  const io::Project before = p;
+  Status cycle = ApplyPairResult(Link(p, "s3", "s2"), p);  // s3 is registered through s2
+  ASSERT_FALSE(cycle.ok());
+  EXPECT_NE(cycle.error().message.find("cycle"), std::string::npos) << cycle.error().message;
+  io::LinkRecord failed = Link(p, "s4", "s2");
+  failed.status = io::LinkStatus::kFailed;
+  failed.reason = "overlap too small";
+  Status f = ApplyPairResult(failed, p);
+  ASSERT_FALSE(f.ok());
+  EXPECT_NE(f.error().message.find("overlap too small"), std::string::npos);
+  Status unregistered = ApplyPairResult(Link(p, "s5", "s2"), p);
+  ASSERT_FALSE(unregistered.ok());
+  EXPECT_NE(unregistered.error().message.find("'s5' is not registered"), std::string::npos);
+  EXPECT_FALSE(ApplyPairResult(Link(p, "s1", "s1"), p).ok());
+  // A refused result changes nothing.
+  for (std::size_t i = 0; i < p.scans.size(); ++i)
+    EXPECT_TRUE(p.scans[i].world_from_scan.isApprox(before.scans[i].world_from_scan, 0.0));
+  EXPECT_EQ(p.links.size(), before.links.size());
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
