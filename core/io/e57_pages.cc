@@ -30,8 +30,7 @@ std::uint32_t Crc32cTable(const unsigned char* p, std::size_t n, std::uint32_t c
 }
 
 #if defined(__x86_64__)
-__attribute__((target("sse4.2"))) std::uint32_t Crc32cSse42(const unsigned char* p, std::size_t n,
-                                                            std::uint32_t crc) {
+__attribute__((target("sse4.2"))) std::uint32_t Crc32cSse42(const unsigned char* p, std::size_t n, std::uint32_t crc) {
   std::uint64_t c = crc;
   for (; n >= 8; n -= 8, p += 8) {
     std::uint64_t word;
@@ -60,8 +59,8 @@ void StoreLe(char* p, T v) {
 bool PageChecksumOk(const char* page) {
   const std::uint32_t crc = Crc32c(page, kPageData);
   const auto* b = reinterpret_cast<const unsigned char*>(page + kPageData);
-  const std::uint32_t stored = (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) |
-                               (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
+  const std::uint32_t stored =
+      (std::uint32_t(b[0]) << 24) | (std::uint32_t(b[1]) << 16) | (std::uint32_t(b[2]) << 8) | std::uint32_t(b[3]);
   return crc == stored;
 }
 
@@ -89,7 +88,8 @@ Expected<PagedReader> PagedReader::Open(const std::filesystem::path& path) {
   const std::string source = path.string();
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(source.c_str(), "rb"), &std::fclose);
   if (!file) {
-    return MakeError(ErrorCode::kIoError, source + ": cannot open the file for reading; check the path and permissions");
+    return MakeError(ErrorCode::kIoError,
+                     source + ": cannot open the file for reading; check the path and permissions");
   }
   std::error_code ec;
   const std::uint64_t size = std::filesystem::file_size(path, ec);
@@ -152,8 +152,8 @@ Status PagedReader::Read(std::uint64_t physical_offset, std::uint64_t n, const s
     block.resize(pages * kPageSize);
     if (std::fseek(file_.get(), static_cast<long>(first_page * kPageSize), SEEK_SET) != 0 ||
         std::fread(block.data(), 1, block.size(), file_.get()) != block.size()) {
-      return MakeError(ErrorCode::kIoError, source_ + ": cannot read " + what + " (page " +
-                                                std::to_string(first_page) + "); the file is truncated or unreadable");
+      return MakeError(ErrorCode::kIoError, source_ + ": cannot read " + what + " (page " + std::to_string(first_page) +
+                                                "); the file is truncated or unreadable");
     }
     for (std::uint64_t k = 0; k < pages && out->size() < n; ++k) {
       const char* page = block.data() + k * kPageSize;

@@ -41,7 +41,10 @@ std::vector<FieldStream> MakeStreams(const ScanDesc& scan) {
     FieldStream& s = streams[i];
     s.field = &scan.fields[i];
     if (cartesian) {
-      s.role = n == "cartesianX" ? Role::kX : n == "cartesianY" ? Role::kY : n == "cartesianZ" ? Role::kZ : Role::kOther;
+      s.role = n == "cartesianX"   ? Role::kX
+               : n == "cartesianY" ? Role::kY
+               : n == "cartesianZ" ? Role::kZ
+                                   : Role::kOther;
     } else {
       s.role = n == "sphericalRange"       ? Role::kRange
                : n == "sphericalAzimuth"   ? Role::kAzimuth
@@ -151,19 +154,27 @@ class RecordDecoder {
       } else {
         raw = static_cast<std::int64_t>(static_cast<std::uint64_t>(f.minimum) + bits);
         if (raw > f.maximum || raw < f.minimum) {
-          return Bad(i, "'" + f.name + "' = " + std::to_string(raw) + " is above its maximum " +
-                            std::to_string(f.maximum));
+          return Bad(
+              i, "'" + f.name + "' = " + std::to_string(raw) + " is above its maximum " + std::to_string(f.maximum));
         }
         value = f.type == FieldType::kScaledInteger ? double(raw) * f.scale + f.offset : double(raw);
       }
       switch (s.role) {
         case Role::kX:
-        case Role::kRange: c[0] = value; break;
+        case Role::kRange:
+          c[0] = value;
+          break;
         case Role::kY:
-        case Role::kAzimuth: c[1] = value; break;
+        case Role::kAzimuth:
+          c[1] = value;
+          break;
         case Role::kZ:
-        case Role::kElevation: c[2] = value; break;
-        case Role::kIntensity: out_.intensity[i] = static_cast<float>(value); break;
+        case Role::kElevation:
+          c[2] = value;
+          break;
+        case Role::kIntensity:
+          out_.intensity[i] = static_cast<float>(value);
+          break;
         case Role::kRow:
         case Role::kColumn: {
           if (raw < std::numeric_limits<std::int32_t>::min() || raw > std::numeric_limits<std::int32_t>::max()) {
@@ -173,8 +184,11 @@ class RecordDecoder {
           break;
         }
         case Role::kInvalid:
-        case Role::kReturn: valid = valid && value == 0.0; break;
-        case Role::kOther: break;
+        case Role::kReturn:
+          valid = valid && value == 0.0;
+          break;
+        case Role::kOther:
+          break;
       }
     }
     if (spherical_) {
@@ -226,8 +240,8 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
   if (static_cast<std::uint8_t>(header[0]) != kCompressedVectorSection || section_length < kSectionHeaderSize ||
       section_length > file.logical_length() - section_start) {
     return MakeError(ErrorCode::kParseError, where + ": the points fileOffset " + std::to_string(scan.points_offset) +
-                                                     " does not hold a valid CompressedVector section (wrong id or a "
-                                                     "length beyond the file); the file is damaged");
+                                                 " does not hold a valid CompressedVector section (wrong id or a "
+                                                 "length beyond the file); the file is damaged");
   }
   const std::uint64_t data_start = LogicalFromPhysical(data_offset) - section_start;
   if (data_offset % kPageSize >= kPageData || LogicalFromPhysical(data_offset) < section_start + kSectionHeaderSize ||
@@ -240,9 +254,9 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
   // A prototype of constants only (0 bits a record) stores nothing: no real scan, refuse it.
   const std::uint64_t capacity = bits_per_record == 0 ? 0 : (section_length - data_start) * 8 / bits_per_record;
   if (scan.record_count > capacity) {
-    return MakeError(ErrorCode::kParseError,
-                     where + ": recordCount " + std::to_string(scan.record_count) + " is more than the points section (" +
-                         std::to_string(section_length) + " bytes) can hold; the file is truncated or damaged");
+    return MakeError(ErrorCode::kParseError, where + ": recordCount " + std::to_string(scan.record_count) +
+                                                 " is more than the points section (" + std::to_string(section_length) +
+                                                 " bytes) can hold; the file is truncated or damaged");
   }
 
   std::vector<FieldStream> streams = MakeStreams(scan);

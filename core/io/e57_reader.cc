@@ -1,5 +1,6 @@
 #include "core/io/e57_reader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -12,8 +13,8 @@ namespace scanreg::io {
 
 namespace {
 
-constexpr double kMaxSide = 1e6;         // rows or columns
-constexpr double kMaxCells = 5e8;        // rows * columns
+constexpr double kMaxSide = 1e6;           // rows or columns
+constexpr double kMaxCells = 5e8;          // rows * columns
 constexpr double kMaxCellsPerPoint = 1e3;  // a grid far sparser than this is a corrupt index
 
 struct OpenedE57 {
@@ -60,8 +61,7 @@ Expected<std::vector<std::size_t>> SelectScans(const std::vector<e57::ScanDesc>&
       for (std::size_t i = 0; i < scans.size() && i < 20; ++i)
         names += (i ? ", '" : "'") + ScanName(scans[i], i, scans.size(), path) + "'";
       if (scans.size() > 20) names += ", ...";
-      return MakeError(ErrorCode::kNotFound,
-                       path.string() + ": no scan named '" + name + "'; the file holds " + names);
+      return MakeError(ErrorCode::kNotFound, path.string() + ": no scan named '" + name + "'; the file holds " + names);
     }
   }
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -96,7 +96,8 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
   std::int64_t col_min = row_min, col_max = row_max;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
     if (!records.valid[i]) continue;
-    row_min = std::min<std::int64_t>(row_min, records.row[i]), row_max = std::max<std::int64_t>(row_max, records.row[i]);
+    row_min = std::min<std::int64_t>(row_min, records.row[i]),
+    row_max = std::max<std::int64_t>(row_max, records.row[i]);
     col_min = std::min<std::int64_t>(col_min, records.column[i]);
     col_max = std::max<std::int64_t>(col_max, records.column[i]);
   }
@@ -105,8 +106,9 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
     if (row_min < b.row_minimum || row_max > b.row_maximum || col_min < b.column_minimum ||
         col_max > b.column_maximum) {
       if (row_min <= row_max) {
-        return MakeError(ErrorCode::kParseError, where + ": a rowIndex/columnIndex lies outside the scan's indexBounds; "
-                                                         "the file is damaged");
+        return MakeError(ErrorCode::kParseError, where +
+                                                     ": a rowIndex/columnIndex lies outside the scan's indexBounds; "
+                                                     "the file is damaged");
       }
     }
     row_min = b.row_minimum, row_max = b.row_maximum, col_min = b.column_minimum, col_max = b.column_maximum;
@@ -123,16 +125,15 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
                                                  " points; the row/column indices are corrupt");
   }
   Scan scan(std::move(name), int(rows), int(cols));
-  const double scale = intensity_range.second > intensity_range.first
-                           ? 1.0 / (intensity_range.second - intensity_range.first)
-                           : 0.0;
+  const double scale =
+      intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
     if (!records.valid[i]) continue;
     const int r = int(records.row[i] - row_min), c = int(records.column[i] - col_min);
     if (scan.IsValid(r, c)) continue;  // keep the first point of a cell
     const float refl = records.intensity.empty() ? 0.5f
-                       : scale > 0.0     ? float((records.intensity[i] - intensity_range.first) * scale)
-                                         : 0.5f;
+                       : scale > 0.0             ? float((records.intensity[i] - intensity_range.first) * scale)
+                                                 : 0.5f;
     scan.Set(r, c, records.xyz[i], refl);
   }
   EstimateAngularGrid(scan);
@@ -143,9 +144,8 @@ Expected<Scan> CloudScan(const e57::PointRecords& records, std::string name, con
                          const std::pair<double, double>& intensity_range) {
   std::vector<Eigen::Vector3f> points;
   std::vector<float> reflectance;
-  const double scale = intensity_range.second > intensity_range.first
-                           ? 1.0 / (intensity_range.second - intensity_range.first)
-                           : 0.0;
+  const double scale =
+      intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
     if (!records.valid[i]) continue;
     points.push_back(records.xyz[i]);
@@ -168,9 +168,10 @@ Expected<std::vector<E57ScanInfo>> ListE57Scans(const std::filesystem::path& pat
     info.name = ScanName(d, i, opened->scans.size(), path);
     info.points = d.record_count;
     if (d.HasGrid() && d.index_bounds) {
-      info.rows = int(std::clamp<std::int64_t>(d.index_bounds->row_maximum - d.index_bounds->row_minimum + 1, 0, 1 << 30));
-      info.cols = int(std::clamp<std::int64_t>(
-          d.index_bounds->column_maximum - d.index_bounds->column_minimum + 1, 0, 1 << 30));
+      info.rows =
+          int(std::clamp<std::int64_t>(d.index_bounds->row_maximum - d.index_bounds->row_minimum + 1, 0, 1 << 30));
+      info.cols = int(
+          std::clamp<std::int64_t>(d.index_bounds->column_maximum - d.index_bounds->column_minimum + 1, 0, 1 << 30));
     }
     info.has_intensity = d.FieldIndex("intensity") >= 0;
     info.has_pose = d.has_pose;

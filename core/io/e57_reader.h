@@ -20,7 +20,7 @@ namespace scanreg::io {
 
 // What ListE57Scans tells without decoding points.
 struct E57ScanInfo {
-  std::string name;  // as ReadE57 names the scan
+  std::string name;          // as ReadE57 names the scan
   std::uint64_t points = 0;  // records in the file (valid or not)
   int rows = 0, cols = 0;    // from indexBounds; 0 when the scan has no grid or no bounds
   bool has_intensity = false;

@@ -1,7 +1,10 @@
 #include "core/io/e57_writer.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <memory>
 #include <pugixml.hpp>
 #include <random>
 #include <sstream>
@@ -31,8 +34,8 @@ struct WrittenScan {
 };
 
 std::uint64_t PacketLength(std::size_t records, int row_bits, int col_bits) {
-  const std::uint64_t bytes = 6 + 2 * kStreams + 4 * 4 * records + (records * row_bits + 7) / 8 +
-                              (records * col_bits + 7) / 8;
+  const std::uint64_t bytes =
+      6 + 2 * kStreams + 4 * 4 * records + (records * row_bits + 7) / 8 + (records * col_bits + 7) / 8;
   return (bytes + 3) / 4 * 4;
 }
 
@@ -46,9 +49,8 @@ void PutFloat(std::string& out, float v) {
   out.append(b, 4);
 }
 
-Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info, std::size_t* done,
-                       std::size_t total, const std::string& target, ProgressSink& progress,
-                       const CancelToken& cancel) {
+Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info, std::size_t* done, std::size_t total,
+                       const std::string& target, ProgressSink& progress, const CancelToken& cancel) {
   std::vector<std::size_t> cells;
   cells.reserve(scan.CountValid());
   for (std::size_t i = 0; i < scan.size(); ++i)

@@ -1,5 +1,6 @@
 #include "core/io/e57_xml.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -14,7 +15,8 @@ namespace {
 std::string_view Trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\n' || s.front() == '\r' || s.front() == '\t'))
     s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\n' || s.back() == '\r' || s.back() == '\t')) s.remove_suffix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\n' || s.back() == '\r' || s.back() == '\t'))
+    s.remove_suffix(1);
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
   return s;
 }
@@ -41,13 +43,14 @@ class ScanParser {
     if (const pugi::xml_node b = node.child("indexBounds")) {
       IndexBounds bounds;
       const std::pair<const char*, std::int64_t*> items[] = {{"rowMinimum", &bounds.row_minimum},
-                                                            {"rowMaximum", &bounds.row_maximum},
-                                                            {"columnMinimum", &bounds.column_minimum},
-                                                            {"columnMaximum", &bounds.column_maximum}};
+                                                             {"rowMaximum", &bounds.row_maximum},
+                                                             {"columnMinimum", &bounds.column_minimum},
+                                                             {"columnMaximum", &bounds.column_maximum}};
       for (const auto& [name, out] : items) {
         double v = 0;
         if (Status s = Number(b.child(name), std::string("indexBounds/") + name, 0.0, &v); !s) return s.error();
-        if (v != std::floor(v) || std::fabs(v) > 1e15) return Bad(std::string("indexBounds/") + name + " is not an integer");
+        if (v != std::floor(v) || std::fabs(v) > 1e15)
+          return Bad(std::string("indexBounds/") + name + " is not an integer");
         *out = static_cast<std::int64_t>(v);
       }
       scan.index_bounds = bounds;
@@ -78,14 +81,16 @@ class ScanParser {
     const std::string_view text = node.text().get();
     if (type == "Float") {
       double v = 0;
-      if (!Trim(text).empty() && !ParseText(text, &v)) return Bad(what + " '" + std::string(text) + "' is not a number");
+      if (!Trim(text).empty() && !ParseText(text, &v))
+        return Bad(what + " '" + std::string(text) + "' is not a number");
       if (!std::isfinite(v)) return Bad(what + " is NaN or infinite");
       *out = v;
       return Status::Ok();
     }
     if (type == "Integer" || type == "ScaledInteger") {
       std::int64_t raw = 0;
-      if (!Trim(text).empty() && !ParseText(text, &raw)) return Bad(what + " '" + std::string(text) + "' is not an integer");
+      if (!Trim(text).empty() && !ParseText(text, &raw))
+        return Bad(what + " '" + std::string(text) + "' is not an integer");
       double scale = 1.0, offset = 0.0;
       if (type == "ScaledInteger") {
         if (Status s = DoubleAttr(node, "scale", what, 1.0, &scale); !s) return s;
@@ -185,8 +190,8 @@ class ScanParser {
       }
       field->single_precision = precision == "single";
       field->bits = field->single_precision ? 32 : 64;
-      for (auto [attr, out] : {std::make_pair("minimum", &field->float_minimum),
-                               std::make_pair("maximum", &field->float_maximum)}) {
+      for (auto [attr, out] :
+           {std::make_pair("minimum", &field->float_minimum), std::make_pair("maximum", &field->float_maximum)}) {
         double v = 0;
         if (node.attribute(attr)) {
           if (Status s = DoubleAttr(node, attr, what, 0.0, &v); !s) return s;
@@ -241,9 +246,9 @@ Expected<std::vector<ScanDesc>> ParseE57Xml(std::string_view xml, const std::str
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(xml.data(), xml.size());
   if (!parsed) {
-    return MakeError(ErrorCode::kParseError, source + ": the XML section is not valid XML (" +
-                                                 parsed.description() + " at byte " +
-                                                 std::to_string(parsed.offset) + "); the file is damaged");
+    return MakeError(ErrorCode::kParseError, source + ": the XML section is not valid XML (" + parsed.description() +
+                                                 " at byte " + std::to_string(parsed.offset) +
+                                                 "); the file is damaged");
   }
   const pugi::xml_node root = doc.child("e57Root");
   if (!root) {

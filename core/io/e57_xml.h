@@ -23,10 +23,10 @@ struct Field {
   bool single_precision = false;  // Float: 4 bytes instead of 8
   std::int64_t minimum = 0;       // (Scaled)Integer raw limits
   std::int64_t maximum = 0;
-  double scale = 1.0;   // ScaledInteger: value = raw * scale + offset
+  double scale = 1.0;  // ScaledInteger: value = raw * scale + offset
   double offset = 0.0;
   std::optional<double> float_minimum, float_maximum;  // Float: declared limits, if any
-  int bits = 0;  // bits per value in the bytestream
+  int bits = 0;                                        // bits per value in the bytestream
 
   // The smallest and largest value the field can hold (for intensity without intensityLimits).
   std::optional<std::pair<double, double>> ValueLimits() const;

@@ -82,7 +82,7 @@ TEST(E57, RoundTripKeepsGridPointsReflectanceAndPoses) {
   ASSERT_EQ(back->size(), 2u);
   ExpectSameScan(scans[0], (*back)[0]);
   ExpectSameScan(scans[1], (*back)[1]);
-  EXPECT_LT(scans[0].CountValid(), scans[0].size());  // the test has empty cells
+  EXPECT_LT(scans[0].CountValid(), scans[0].size());                                 // the test has empty cells
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);  // no temporary left
 }
 
@@ -272,7 +272,8 @@ TEST(E57, ReadsSphericalCoordinates) {
   // Write (range, azimuth, elevation) in the cartesian fields, then rename the fields.
   Scan stored("sph", 10, 30);
   for (int r = 0; r < stored.rows; ++r)
-    for (int c = 0; c < stored.cols; ++c) stored.Set(r, c, {2.0f + 0.01f * c, -1.0f + 0.05f * c, 0.4f - 0.07f * r}, 0.5f);
+    for (int c = 0; c < stored.cols; ++c)
+      stored.Set(r, c, {2.0f + 0.01f * c, -1.0f + 0.05f * c, 0.4f - 0.07f * r}, 0.5f);
   ASSERT_TRUE(WriteE57(dir / "a.e57", {stored}, progress, cancel).ok());
   std::string bytes = ReadBytes(dir / "a.e57");
   bytes = EditXml(bytes, "<cartesianX ", "<sphericalRange ");
@@ -301,8 +302,8 @@ TEST(E57, ScanWithoutGridIsOrganizedAndIntensityUsesItsLimits) {
   ASSERT_TRUE(WriteE57(dir / "a.e57", {scan}, progress, cancel).ok());
   const std::string bytes = ReadBytes(dir / "a.e57");
 
-  WriteBytes(dir / "limits.e57", EditXml(bytes, "<intensityMaximum type=\"Float\">1<",
-                                         "<intensityMaximum type=\"Float\">2<"));
+  WriteBytes(dir / "limits.e57",
+             EditXml(bytes, "<intensityMaximum type=\"Float\">1<", "<intensityMaximum type=\"Float\">2<"));
   Expected<std::vector<Scan>> halved = ReadE57(dir / "limits.e57", {}, progress, cancel);
   ASSERT_TRUE(halved.ok()) << halved.error().ToString();
   float max_err = 0.0f;
@@ -375,7 +376,8 @@ TEST(E57, MalformedFilesGiveClearErrors) {
   EXPECT_TRUE(Has(ReadError(dir, "PLY not e57" + std::string(2000, ' ')), "not an E57 file"));
 
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "data3D", "dataXX")), "no data3D element"));
-  EXPECT_TRUE(Has(ReadError(dir, EditXml(EditXml(good, "<points ", "<pointz "), "</points>", "</pointz>")), "no 'points' element"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(EditXml(good, "<points ", "<pointz "), "</points>", "</pointz>")),
+                  "no 'points' element"));
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "\"CompressedVector\"", "\"CompressedVectoR\"")),
                   "'points' is not a CompressedVector"));
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "</e57Root>", "</e57Root")), "not valid XML"));
