@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <random>
 
+#include "core/io/e57_bitpack.h"
 #include "core/io/e57_pages.h"
 #include "core/io/e57_reader.h"
 #include "core/io/e57_writer.h"
@@ -66,6 +68,41 @@ void ExpectSameScan(const Scan& want, const Scan& got) {
   EXPECT_LE((want.world_from_scan.linear() - got.world_from_scan.linear()).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LE((want.world_from_scan.translation() - got.world_from_scan.translation()).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_FALSE(got.angles.empty());
+}
+
+TEST(E57, ChecksumAndBitPackingFollowTheStandard) {
+  EXPECT_EQ(e57::Crc32c("123456789", 9), 0xE3069283u);  // the CRC-32C check value
+  EXPECT_EQ(e57::BitWidth(0, 0), 0);
+  EXPECT_EQ(e57::BitWidth(0, 1073), 11);
+  EXPECT_EQ(e57::BitWidth(-8388608, 8388607), 24);
+  EXPECT_EQ(e57::BitWidth(std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::max()), 64);
+  // LSB first: 3 (2 bits) then 5 (3 bits) then 1 (1 bit) = 0b1'101'11 in the first byte.
+  e57::BitWriter w;
+  w.Write(3, 2), w.Write(5, 3), w.Write(1, 1);
+  EXPECT_EQ(w.Take(true), std::string(1, char(0x37)));
+  // Every width 1..64, values split across pieces of 1..7 bytes, as across data packets.
+  std::mt19937_64 rng(3);
+  std::vector<std::pair<std::uint64_t, int>> values;
+  for (int k = 0; k < 2000; ++k) {
+    const int bits = 1 + k % 64;
+    values.emplace_back(rng() & (~std::uint64_t(0) >> (64 - bits)), bits);
+    w.Write(values.back().first, bits);
+  }
+  const std::string bytes = w.Take(true);
+  e57::BitReader r;
+  std::size_t fed = 0, read = 0;
+  for (const auto& [value, bits] : values) {
+    std::uint64_t got = 0;
+    while (!r.Read(bits, &got)) {
+      ASSERT_LT(fed, bytes.size());
+      const std::size_t piece = std::min<std::size_t>(1 + fed % 7, bytes.size() - fed);
+      r.Append(std::string_view(bytes).substr(fed, piece));
+      fed += piece;
+    }
+    ASSERT_EQ(got, value) << "value " << read << ", " << bits << " bits";
+    ++read;
+  }
+  EXPECT_EQ(read, values.size());
 }
 
 TEST(E57, RoundTripKeepsGridPointsReflectanceAndPoses) {
