@@ -18,7 +18,10 @@ constexpr double kDeg = 180.0 / M_PI;
 void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& scans,
                const std::vector<pipeline::ReferenceError>& errors) {
   const int n = static_cast<int>(scans.size());
-  std::printf("\nconfusion matrix C(i,j): matches of i's features in j (diagonal: features of i)\n%8s", "");
+  const bool by_overlap = !r.links.empty() && r.links.front().method.rfind("none+", 0) == 0;  // --coarse none
+  std::printf(by_overlap ? "\noverlap at the current poses (per mille of j's samples near i)\n%8s"
+                         : "\nconfusion matrix C(i,j): matches of i's features in j (diagonal: features of i)\n%8s",
+              "");
   for (int j = 0; j < n; ++j) std::printf(" %7s", scans[j].name.c_str());
   std::printf("\n");
   for (int i = 0; i < n; ++i) {

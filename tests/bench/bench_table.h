@@ -41,5 +41,6 @@ void RunSimulateBench(Table& table, bool quick);
 void RunRegisterBench(Table& table, bool quick);
 void RunMergeBench(Table& table, bool quick);
 void RunEmBench(Table& table, bool quick);
+void RunGlobalBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench
