@@ -40,7 +40,7 @@ void DrawLink(cv::Mat& image, cv::Point2d a, cv::Point2d b, const io::LinkRecord
   if (l.loop_check) {
     DrawDashedLine(image, a, b, color, 2, 2, 6);
   } else if (l.status == io::LinkStatus::kFailed || l.user_rejected) {
-    DrawDashedLine(image, a, b, color, 2, 10, 7);
+    DrawDashedLine(image, a, b, color, 1, 9, 6);
   } else {
     cv::line(image, a, b, cv::Scalar(235, 235, 235), 11, cv::LINE_AA);
     cv::line(image, a, b, color, 5, cv::LINE_AA);
@@ -142,7 +142,9 @@ cv::Mat DrawScanNetwork(const io::Project& project) {
       cv::circle(image, at[i], 8, kUnregistered, 2, cv::LINE_AA);
     }
     if (i == root) cv::circle(image, at[i], 13, kInk, 2, cv::LINE_AA);
-    DrawText(image, project.scans[i].name, cv::Point(at[i] + cv::Point2d(12, -12)), 0.55, reg ? kInk : kUnregistered,
+    // Unregistered scans sit in the strip, where links arrive from above: label them underneath.
+    const cv::Point2d label_offset = reg ? cv::Point2d(12, -12) : cv::Point2d(-12, 30);
+    DrawText(image, project.scans[i].name, cv::Point(at[i] + label_offset), 0.55, reg ? kInk : kUnregistered,
              reg ? 2 : 1);
   }
   DrawLegend(image, kMapHeight + kStripHeight);

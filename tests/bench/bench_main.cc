@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   const std::vector<std::pair<std::string, Section>> sections = {
       {"simulate", scanreg::bench::RunSimulateBench}, {"io", scanreg::bench::RunIoBench},
       {"register", scanreg::bench::RunRegisterBench}, {"merge", scanreg::bench::RunMergeBench},
+      {"export", scanreg::bench::RunExportBench},
       {"em", scanreg::bench::RunEmBench}, {"global", scanreg::bench::RunGlobalBench}};
   bool quick = false;
   std::vector<std::string> chosen;
@@ -43,7 +44,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
       chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|em|global ...]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global ...]\n");
       return 2;
     }
   }

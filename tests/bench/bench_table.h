@@ -40,6 +40,7 @@ void RunIoBench(Table& table, bool quick);
 void RunSimulateBench(Table& table, bool quick);
 void RunRegisterBench(Table& table, bool quick);
 void RunMergeBench(Table& table, bool quick);
+void RunExportBench(Table& table, bool quick);
 void RunEmBench(Table& table, bool quick);
 void RunGlobalBench(Table& table, bool quick);
 
