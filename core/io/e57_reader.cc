@@ -96,7 +96,7 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
   std::int64_t col_min = row_min, col_max = row_max;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
     if (!records.valid[i]) continue;
-    row_min = std::min<std::int64_t>(row_min, records.row[i]),
+    row_min = std::min<std::int64_t>(row_min, records.row[i]);
     row_max = std::max<std::int64_t>(row_max, records.row[i]);
     col_min = std::min<std::int64_t>(col_min, records.column[i]);
     col_max = std::max<std::int64_t>(col_max, records.column[i]);
@@ -113,11 +113,11 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
     }
     row_min = b.row_minimum, row_max = b.row_maximum, col_min = b.column_minimum, col_max = b.column_maximum;
   }
-  if (row_min > row_max || col_min > col_max) {  // no valid point and no bounds
+  if (!desc.index_bounds && (row_min > row_max || col_min > col_max)) {  // no valid point and no bounds
     row_min = row_max = col_min = col_max = 0;
   }
   const double rows = double(row_max) - double(row_min) + 1, cols = double(col_max) - double(col_min) + 1;
-  if (rows > kMaxSide || cols > kMaxSide || rows * cols > kMaxCells ||
+  if (rows < 1 || cols < 1 || rows > kMaxSide || cols > kMaxSide || rows * cols > kMaxCells ||
       rows * cols > 1e6 + kMaxCellsPerPoint * double(records.xyz.size())) {
     return MakeError(ErrorCode::kParseError, where + ": impossible grid of " + std::to_string(std::int64_t(rows)) +
                                                  " rows x " + std::to_string(std::int64_t(cols)) + " columns for " +

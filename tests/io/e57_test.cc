@@ -44,6 +44,36 @@ std::string PagedBytes(const std::string& logical) {
   return out;
 }
 
+// The file with its XML section (the last thing our writer puts in a file) replaced by
+// edit(xml), lengths and checksums updated.
+std::string WithXml(const std::string& file, const std::function<std::string(std::string)>& edit) {
+  std::string logical = LogicalBytes(file);
+  std::uint64_t xml_offset = 0, xml_length = 0;
+  std::memcpy(&xml_offset, &logical[24], 8);
+  std::memcpy(&xml_length, &logical[32], 8);
+  const std::uint64_t start = e57::LogicalFromPhysical(xml_offset);
+  const std::string xml = edit(logical.substr(start, xml_length));
+  logical.resize(start);
+  logical += xml;
+  xml_length = xml.size();
+  const std::uint64_t physical_length = (logical.size() + e57::kPageData - 1) / e57::kPageData * e57::kPageSize;
+  std::memcpy(&logical[32], &xml_length, 8);
+  std::memcpy(&logical[16], &physical_length, 8);
+  return PagedBytes(logical);
+}
+
+// Replaces every `from` by `to` in the file's XML.
+std::string EditXml(const std::string& file, const std::string& from, const std::string& to) {
+  return WithXml(file, [&](std::string xml) {
+    EXPECT_NE(xml.find(from), std::string::npos) << from;
+    for (std::size_t at = xml.find(from); at != std::string::npos; at = xml.find(from, at + to.size()))
+      xml.replace(at, from.size(), to);
+    return xml;
+  });
+}
+
+bool Has(const std::string& message, const std::string& part) { return message.find(part) != std::string::npos; }
+
 std::vector<Scan> TwoPosedScans() {
   Scan a = MakeRoomScan(40, 90, "station A");
   a.world_from_scan = MakePose(0.7, {0.2, -0.3, 1.0}, {412345.125, 5523456.75, 312.0625});
@@ -187,6 +217,11 @@ TEST(E57, ScanWithoutValidPointKeepsItsGrid) {
   EXPECT_EQ((*back)[0].cols, 7);
   EXPECT_EQ((*back)[0].CountValid(), 0u);
   EXPECT_EQ((*back)[1].CountValid(), scans[1].CountValid());
+  // Bounds of an empty scan are all there is to check.
+  WriteBytes(dir / "b.e57", EditXml(ReadBytes(dir / "a.e57"), ">4</rowMaximum>", ">-3</rowMaximum>"));
+  Expected<std::vector<Scan>> bad = ReadE57(dir / "b.e57", {}, progress, cancel);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_TRUE(Has(bad.error().message, "impossible grid of -2 rows x 7 columns")) << bad.error().message;
 }
 
 TEST(E57, CancelStopsReadingAndWriting) {
@@ -271,36 +306,6 @@ std::string ReadError(const TempDir& dir, const std::string& bytes) {
   EXPECT_NE(r.error().message.find("bad.e57"), std::string::npos) << r.error().message;
   return r.error().message;
 }
-
-// The file with its XML section (the last thing our writer puts in a file) replaced by
-// edit(xml), lengths and checksums updated.
-std::string WithXml(const std::string& file, const std::function<std::string(std::string)>& edit) {
-  std::string logical = LogicalBytes(file);
-  std::uint64_t xml_offset = 0, xml_length = 0;
-  std::memcpy(&xml_offset, &logical[24], 8);
-  std::memcpy(&xml_length, &logical[32], 8);
-  const std::uint64_t start = e57::LogicalFromPhysical(xml_offset);
-  const std::string xml = edit(logical.substr(start, xml_length));
-  logical.resize(start);
-  logical += xml;
-  xml_length = xml.size();
-  const std::uint64_t physical_length = (logical.size() + e57::kPageData - 1) / e57::kPageData * e57::kPageSize;
-  std::memcpy(&logical[32], &xml_length, 8);
-  std::memcpy(&logical[16], &physical_length, 8);
-  return PagedBytes(logical);
-}
-
-// Replaces every `from` by `to` in the file's XML.
-std::string EditXml(const std::string& file, const std::string& from, const std::string& to) {
-  return WithXml(file, [&](std::string xml) {
-    EXPECT_NE(xml.find(from), std::string::npos) << from;
-    for (std::size_t at = xml.find(from); at != std::string::npos; at = xml.find(from, at + to.size()))
-      xml.replace(at, from.size(), to);
-    return xml;
-  });
-}
-
-bool Has(const std::string& message, const std::string& part) { return message.find(part) != std::string::npos; }
 
 TEST(E57, ReadsSphericalCoordinates) {
   TempDir dir;
@@ -420,6 +425,8 @@ TEST(E57, MalformedFilesGiveClearErrors) {
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "</e57Root>", "</e57Root")), "not valid XML"));
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "<cartesianY ", "<cartesianQ ")), "neither cartesianX/Y/Z"));
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "maximum=\"11\"", "maximum=\"-1\"")), "is larger than maximum"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, ">11</rowMaximum>", ">-3</rowMaximum>")), "indexBounds"));
+  EXPECT_TRUE(Has(ReadError(dir, EditXml(good, ">11</rowMaximum>", ">9999999</rowMaximum>")), "impossible grid"));
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, "precision=\"single\"", "precision=\"singlE\"")), "precision"));
   const std::string count = "recordCount=\"" + std::to_string(MakeRoomScan(12, 20).CountValid()) + "\"";
   EXPECT_TRUE(Has(ReadError(dir, EditXml(good, count, "recordCount=\"100000\"")), "recordCount 100000 is more"));
