@@ -43,7 +43,7 @@ void DrawDashedLine(cv::Mat& image, cv::Point2d a, cv::Point2d b, const cv::Scal
   const cv::Point2d step = (b - a) / length;
   for (double s = 0; s < length; s += dash + gap) {
     const double e = std::min(s + dash, length);
-    cv::line(image, a + step * s, a + step * e, color, thickness, cv::LINE_AA);
+    cv::line(image, a + step * s, a + step * e, color, thickness, thickness > 1 ? cv::LINE_AA : cv::LINE_8);
   }
 }
 

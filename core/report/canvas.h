@@ -22,7 +22,7 @@ void DrawTextCentered(cv::Mat& image, const std::string& text, cv::Point center,
                       int thickness = 1);
 cv::Size TextSize(const std::string& text, double scale, int thickness = 1);
 
-// A line drawn as dashes of `dash` pixels separated by `gap` pixels.
+// A line drawn as dashes of `dash` pixels separated by `gap` pixels (1 px without antialiasing: crisp).
 void DrawDashedLine(cv::Mat& image, cv::Point2d a, cv::Point2d b, const cv::Scalar& color, int thickness, double dash,
                     double gap);
 

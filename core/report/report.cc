@@ -13,6 +13,7 @@
 #include "core/report/error_chart.h"
 #include "core/report/html_table.h"
 #include "core/report/network_image.h"
+#include "core/report/project_view.h"
 
 namespace scanreg::report {
 namespace {
@@ -56,10 +57,6 @@ std::string Matrix(const Eigen::Isometry3d& t) {
     s += buf;
   }
   return s + "</pre>";
-}
-
-bool IsTreeLink(const io::LinkRecord& l) {
-  return !l.loop_check && l.status != io::LinkStatus::kFailed && !l.user_rejected;
 }
 
 std::string SummarySection(const io::Project& p) {
@@ -113,13 +110,22 @@ std::string ConfusionSection(const io::Project& p, const std::filesystem::path& 
            "<p>Not available: the project has not been registered since its scans last changed (the matrix is "
            "stored by <code>scanreg-cli register</code>).</p>\n";
   }
+  const std::vector<int> order = ScanOrder(p);
+  const int n = static_cast<int>(order.size());
+  Eigen::MatrixXi ordered(n, n);
   std::vector<std::string> names;
-  for (const io::ProjectScan& s : p.scans) names.push_back(s.name);
-  *status = WritePng(DrawConfusionHeatMap(*confusion, names), dir / kConfusionPng);
+  for (int i = 0; i < n; ++i) {
+    names.push_back(p.scans[order[i]].name);
+    for (int j = 0; j < n; ++j) ordered(i, j) = (*confusion)(order[i], order[j]);
+  }
+  *status = WritePng(DrawConfusionHeatMap(ordered, names), dir / kConfusionPng);
+  std::string listed;
+  for (const std::string& name : names) listed += (listed.empty() ? "" : ", ") + Escape(name);
   return html +
          "<p>C(i, j): matches of scan i's SIFT features in scan j (ratio test, W §2 step 3); diagonal: "
-         "features of scan i. Rows and columns in scan order.</p>\n" +
-         Image(kConfusionPng, "confusion matrix heat map");
+         "features of scan i. Rows and columns in scan order (the root, then each scan as the registration "
+         "placed it): <span id=\"scan-order\">" +
+         listed + "</span>.</p>\n" + Image(kConfusionPng, "confusion matrix heat map");
 }
 
 std::string NetworkSection(const io::Project& p, const std::filesystem::path& dir, Status* status) {

@@ -145,6 +145,12 @@ TEST(Report, RegisteredProjectShowsItsEvidenceAndTheErrorsAgainstTheTruth) {
   EXPECT_EQ(registered, 2);
   EXPECT_EQ(unregistered, 1);
   EXPECT_NE(Table(html, "settings-table").find("simulated.stations"), std::string::npos);
+  // The heat map's scan order starts at the root; the far station comes last.
+  const std::string span = "<span id=\"scan-order\">";
+  const std::size_t order = html.find(span);
+  ASSERT_NE(order, std::string::npos);
+  EXPECT_EQ(html.substr(order + span.size(), loaded->root->size()), *loaded->root);
+  EXPECT_EQ(html.substr(html.find("</span>", order) - 3, 3), loaded->scans[2].name);
 
   // W fig. 6 table: the errors against the true poses, as computed at registration.
   const auto errors = Rows(Table(html, "errors-table"));
