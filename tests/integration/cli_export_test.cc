@@ -16,7 +16,7 @@ namespace scanreg {
 namespace {
 
 using test::Quote;
-using test::ReadAll;
+using test::ReadBytes;
 using test::RunCli;
 using test::RunResult;
 
@@ -47,7 +47,7 @@ TEST(CliExport, ReportOfAProjectAtTheTruePosesShowsZeroErrors) {
   RunResult r = RunCli("report " + Quote(project) + " --out " + Quote(dir / "report"));
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("2 of 3 scans registered"), std::string::npos) << r.output;
-  const std::string html = ReadAll(dir / "report" / "index.html");
+  const std::string html = ReadBytes(dir / "report" / "index.html");
   const std::string errors = html.substr(std::min(html.find("<table id=\"errors-table\">"), html.size()));
   ASSERT_FALSE(errors.empty());
   // Rows: s01 (root), s02 at its true pose -> 0.0 mm; the far station has none.
@@ -130,7 +130,7 @@ TEST(CliExport, ExportCloudsWritesRegisteredScansAndSkipsTheOthers) {
 // Every command of `scanreg-cli --help` has a section in the man page, and every option of each
 // command's --help is described there.
 TEST(CliExport, ManPageListsEveryCommandAndOption) {
-  const std::string man = ReadAll(SCANREG_MAN_PAGE);
+  const std::string man = ReadBytes(SCANREG_MAN_PAGE);
   ASSERT_FALSE(man.empty()) << SCANREG_MAN_PAGE;
   const auto roff = [](std::string s) { return std::regex_replace(s, std::regex("-"), "\\-"); };
   RunResult help = RunCli("--help");

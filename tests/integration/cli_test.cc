@@ -17,7 +17,7 @@ namespace scanreg {
 namespace {
 
 using test::Quote;
-using test::ReadAll;
+using test::ReadBytes;
 using test::RunCli;
 using test::RunResult;
 
@@ -29,13 +29,13 @@ TEST(CliTest, SimulateIsDeterministicAndWritesReferencePoses) {
   RunResult b = RunCli(common + Quote(dir / "b"));
   ASSERT_EQ(b.status, 0) << b.output;
   for (const char* name : {"s01.ptx", "s02.ptx", "s03.ptx"}) {
-    const std::string fa = ReadAll(dir / "a" / name), fb = ReadAll(dir / "b" / name);
+    const std::string fa = ReadBytes(dir / "a" / name), fb = ReadBytes(dir / "b" / name);
     ASSERT_GT(fa.size(), 1000u) << name;
     EXPECT_TRUE(fa == fb) << name << " differs between two runs with the same seed";
   }
   RunResult c = RunCli("simulate --stations 3 --size 400x100 --seed 8 --out " + Quote(dir / "c"));
   ASSERT_EQ(c.status, 0) << c.output;
-  EXPECT_FALSE(ReadAll(dir / "a" / "s01.ptx") == ReadAll(dir / "c" / "s01.ptx")) << "another seed, another scan";
+  EXPECT_FALSE(ReadBytes(dir / "a" / "s01.ptx") == ReadBytes(dir / "c" / "s01.ptx")) << "another seed, another scan";
 
   Expected<io::Project> project = io::LoadProject(dir / "a" / "project.scanreg.json");
   ASSERT_TRUE(project.ok()) << project.error().ToString();
@@ -64,11 +64,11 @@ TEST(CliTest, NewInfoExportAndConvertWorkTogether) {
   (*poses)[1].world_from_scan.translation() << 1.0, 2.0, 3.0;
   ASSERT_TRUE(io::WritePosesJson(dir / "moved.json", *poses).ok());
 
-  const std::string before = ReadAll(dir / "sim" / "s01.ptx");
+  const std::string before = ReadBytes(dir / "sim" / "s01.ptx");
   RunResult created = RunCli("new " + Quote(dir / "mine.scanreg.json") + " " + Quote(dir / "sim" / "s01.ptx") + " " +
                              Quote(dir / "sim" / "s02.ptx") + " --poses " + Quote(dir / "moved.json"));
   ASSERT_EQ(created.status, 0) << created.output;
-  EXPECT_EQ(ReadAll(dir / "sim" / "s01.ptx"), before) << "input files are never modified";
+  EXPECT_EQ(ReadBytes(dir / "sim" / "s01.ptx"), before) << "input files are never modified";
   Expected<io::Project> mine = io::LoadProject(dir / "mine.scanreg.json");
   ASSERT_TRUE(mine.ok());
   EXPECT_NEAR(mine->scans[1].world_from_scan.translation().y(), 2.0, 1e-12);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/io/project.h"
+#include "tests/io/io_test_util.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg::io {
@@ -27,13 +28,6 @@ Project ThreeScans(const test::TempDir& dir) {
   p.scans[1].coarse_world_from_scan = Eigen::Isometry3d(Eigen::Translation3d(4.01, 0.02, -0.01));
   p.scans[2].unregistered_reason = "link to b failed: no overlap";
   return p;
-}
-
-std::string ReadAll(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 TEST(ProjectRegistrationFields, RoundTrip) {
@@ -62,7 +56,7 @@ TEST(ProjectRegistrationFields, AStaleMatrixIsNeitherUsedNorSaved) {
   p.scans.push_back(d);  // a scan added after the registration
   EXPECT_EQ(p.CurrentConfusion(), nullptr);
   ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
-  EXPECT_EQ(ReadAll(dir / "p.scanreg.json").find("\"confusion\""), std::string::npos);
+  EXPECT_EQ(test::ReadBytes(dir / "p.scanreg.json").find("\"confusion\""), std::string::npos);
   Expected<Project> back = LoadProject(dir / "p.scanreg.json");
   ASSERT_TRUE(back.ok()) << back.error().ToString();
   EXPECT_EQ(back->CurrentConfusion(), nullptr);
@@ -75,7 +69,7 @@ TEST(ProjectRegistrationFields, AStaleMatrixIsNeitherUsedNorSaved) {
 TEST(ProjectRegistrationFields, AMalformedMatrixIsAClearError) {
   test::TempDir dir;
   ASSERT_TRUE(SaveProject(ThreeScans(dir), dir / "p.scanreg.json").ok());
-  std::string text = ReadAll(dir / "p.scanreg.json");
+  std::string text = test::ReadBytes(dir / "p.scanreg.json");
   const std::size_t at = text.find("870");
   ASSERT_NE(at, std::string::npos);
   text.replace(at, 3, "-870");

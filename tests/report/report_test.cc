@@ -15,17 +15,11 @@
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
+#include "tests/io/io_test_util.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg::report {
 namespace {
-
-std::string ReadAll(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // The text of <table id="id"> ... </table>, empty when absent.
 std::string Table(const std::string& html, const std::string& id) {
@@ -123,7 +117,7 @@ TEST(Report, RegisteredProjectShowsItsEvidenceAndTheErrorsAgainstTheTruth) {
 
   Expected<std::filesystem::path> index = WriteReport(*loaded, dir / "report", progress, cancel);
   ASSERT_TRUE(index.ok()) << index.error().ToString();
-  const std::string html = ReadAll(*index);
+  const std::string html = test::ReadBytes(*index);
   for (const char* id : {"summary", "confusion", "network", "links", "poses", "errors"})
     EXPECT_NE(html.find(std::string("id=\"") + id + "\""), std::string::npos) << id;
   EXPECT_EQ(html.find("not-registered"), std::string::npos);
@@ -181,7 +175,7 @@ TEST(Report, UnregisteredProjectGivesAReportThatSaysSo) {
   ASSERT_TRUE(project.ok()) << project.error().ToString();
   Expected<std::filesystem::path> index = WriteReport(*project, dir / "report", progress, cancel);
   ASSERT_TRUE(index.ok()) << index.error().ToString();
-  const std::string html = ReadAll(*index);
+  const std::string html = test::ReadBytes(*index);
   EXPECT_NE(html.find("id=\"not-registered\""), std::string::npos);
   EXPECT_NE(html.find("has not been registered"), std::string::npos);
   EXPECT_EQ(Rows(Table(html, "links-table")).size(), 0u);
@@ -207,7 +201,7 @@ TEST(Report, AFileOrAnUnwritablePlaceIsAClearError) {
   Expected<std::filesystem::path> below_file = WriteReport(project, dir / "a_file" / "report", progress, cancel);
   ASSERT_FALSE(below_file.ok());
   EXPECT_NE(below_file.error().message.find("a_file"), std::string::npos) << below_file.error().message;
-  EXPECT_EQ(ReadAll(dir / "a_file"), "x") << "the file is left alone";
+  EXPECT_EQ(test::ReadBytes(dir / "a_file"), "x") << "the file is left alone";
   CancelToken cancelled;
   cancelled.Cancel();
   Expected<std::filesystem::path> stopped = WriteReport(project, dir / "r", progress, cancelled);
