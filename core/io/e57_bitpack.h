@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 
@@ -41,6 +42,20 @@ class BitReader {
 
  private:
   bool ReadSmall(int bits, std::uint64_t* value) {
+    if (have_ < bits && data_.size() - offset_ >= 8) {
+      // Refill with one 8-byte load. Bits loaded past the whole bytes taken are the stream's
+      // next bits, so loading them again later (OR) changes nothing.
+      std::uint64_t word = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+      std::memcpy(&word, data_.data() + offset_, 8);
+#else
+      for (int k = 0; k < 8; ++k) word |= std::uint64_t(static_cast<unsigned char>(data_[offset_ + k])) << (8 * k);
+#endif
+      acc_ |= word << have_;
+      const int take = (63 - have_) >> 3;
+      offset_ += take;
+      have_ += 8 * take;
+    }
     while (have_ < bits) {
       acc_ |= std::uint64_t(static_cast<unsigned char>(data_[offset_++])) << have_;
       have_ += 8;

@@ -150,7 +150,7 @@ class RecordDecoder {
         } else {
           std::memcpy(&value, &bits, 8);
         }
-        raw = WholeOrMinusOne(value);
+        if (s.role == Role::kRow || s.role == Role::kColumn) raw = WholeOrMinusOne(value);
       } else {
         raw = static_cast<std::int64_t>(static_cast<std::uint64_t>(f.minimum) + bits);
         if (raw > f.maximum || raw < f.minimum) {
