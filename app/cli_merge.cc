@@ -19,7 +19,8 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
-       {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"}},
+       {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"},
+       {"points", true, false, "FILE.ply also write the merged point cloud (the surface's vertices)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -50,6 +51,10 @@ int RunMerge(const std::vector<std::string>& argv) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: --method must be ml or tsdf, not '" + method + "'"));
   }
   if (Status s = options.Validate(); !s) return Fail(s.error());
+  const auto points = args->Get("points");
+  if (points) {
+    if (Status s = pipeline::ValidatePointsPath(*points); !s) return Fail(s.error());
+  }
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
   TerminalProgress progress;
@@ -68,6 +73,10 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto result = pipeline::MergeScans(*scans, use, options, merge_progress, cancel);
   if (!result) return Fail(result.error());
   if (Status s = pipeline::WriteMesh(*out, result->mesh); !s) return Fail(s.error());
+  if (points) {
+    if (Status s = pipeline::WritePoints(*points, result->mesh); !s) return Fail(s.error());
+    std::printf("merged point cloud: %zu points -> %s\n", result->mesh.vertices.size(), points->c_str());
+  }
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n",
               result->scans, scans->size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml",
               options.voxel_m, result->mesh.triangles.size(), result->mesh.vertices.size(), result->seconds,

@@ -1,5 +1,6 @@
 #include "core/pipeline/merge_scans.h"
 
+#include <cctype>
 #include <string>
 
 #include "core/merge/mesh_io.h"
@@ -38,5 +39,18 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 }
 
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return merge::WriteMeshFile(path, mesh); }
+
+Status ValidatePointsPath(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".ply") return Status::Ok();
+  return MakeError(ErrorCode::kInvalidArgument,
+                   "merge: the merged point cloud is written as PLY; give --points a .ply file, not " + path.string());
+}
+
+Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
+  if (Status s = ValidatePointsPath(path); !s) return s;
+  return merge::WritePointCloudPly(path, mesh.origin, mesh.vertices);
+}
 
 }  // namespace scanreg::pipeline

@@ -234,7 +234,7 @@ TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
   }
   ASSERT_TRUE(io::SaveProject(*project, project_file).ok());
   RunResult merged = RunCli("merge " + Quote(project_file) + " --method tsdf --voxel 0.2 --max-range 15 --out " +
-                            Quote(dir / "m.ply"));
+                            Quote(dir / "m.ply") + " --points " + Quote(dir / "p.ply"));
   ASSERT_EQ(merged.status, 0) << merged.output;
   std::ifstream in(dir / "m.ply", std::ios::binary);
   std::string line;
@@ -243,9 +243,18 @@ TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
     if (line.rfind("element face ", 0) == 0) faces = std::stol(line.substr(13));
   EXPECT_GT(faces, 1000) << "a street within 15 m at 20 cm voxels has thousands of triangles";
   EXPECT_NE(merged.output.find(std::to_string(faces) + " triangles"), std::string::npos) << merged.output;
+  // The merged point cloud (--points): the mesh's vertices.
+  std::ifstream points(dir / "p.ply", std::ios::binary);
+  long vertices = -1;
+  while (std::getline(points, line) && line != "end_header")
+    if (line.rfind("element vertex ", 0) == 0) vertices = std::stol(line.substr(15));
+  EXPECT_NE(merged.output.find(std::to_string(vertices) + " vertices"), std::string::npos) << merged.output;
+  EXPECT_NE(merged.output.find("merged point cloud: " + std::to_string(vertices) + " points"), std::string::npos);
   // Nonsense options are refused.
   EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --voxel 0 --out " + Quote(dir / "x.ply")).status, 2);
   EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --method magic --out " + Quote(dir / "x.ply")).status, 2);
+  EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --points " + Quote(dir / "x.xyz") + " --out " +
+                   Quote(dir / "x.ply")).status, 2);
   EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
 }
 

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "tests/merge/merge_test_util.h"
 #include "tests/support/test_paths.h"
 
@@ -37,6 +39,20 @@ TEST(MergeScansPipeline, MergesOnlySelectedScansAndWrites) {
   ASSERT_TRUE(WriteMesh(dir / "mesh.ply", result->mesh));
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh.ply"));
   EXPECT_FALSE(WriteMesh(dir / "mesh.vtk", result->mesh));
+  // The merged point cloud: one point per mesh vertex, re-read from the PLY header.
+  ASSERT_TRUE(WritePoints(dir / "points.ply", result->mesh));
+  std::ifstream in(dir / "points.ply", std::ios::binary);
+  std::string line;
+  long vertices = -1;
+  while (std::getline(in, line) && line != "end_header") {
+    if (line.rfind("element vertex ", 0) == 0) vertices = std::stol(line.substr(15));
+  }
+  EXPECT_EQ(vertices, long(result->mesh.vertices.size()));
+  EXPECT_EQ(std::filesystem::file_size(dir / "points.ply"), std::size_t(in.tellg()) + 12 * vertices);
+  const Status xyz = WritePoints(dir / "points.xyz", result->mesh);
+  ASSERT_FALSE(xyz);
+  EXPECT_NE(xyz.error().message.find(".ply"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir / "points.xyz"));
 }
 
 TEST(MergeScansPipeline, CancelledMergeWritesNoFile) {
