@@ -20,6 +20,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr std::size_t kRecordsPerPacket = 2048;  // a multiple of 8: every packet ends on a byte
+constexpr std::size_t kPacketsPerReport = 25;    // progress every ~51k points
 constexpr int kStreams = 6;                      // x, y, z, intensity, rowIndex, columnIndex
 constexpr double kGpsEpochUnix = 315964800.0;    // 1980-01-06 in Unix seconds
 constexpr double kGpsLeapSeconds = 18.0;
@@ -78,7 +79,9 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   std::string streams[4], packet;
   for (std::size_t b = 0; b < cells.size(); b += kRecordsPerPacket) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, target + ": writing cancelled");
-    progress.Report(double(*done) / double(std::max<std::size_t>(1, total)), "writing " + scan.name);
+    if ((b / kRecordsPerPacket) % kPacketsPerReport == 0) {
+      progress.Report(double(*done) / double(std::max<std::size_t>(1, total)), "writing " + scan.name);
+    }
     const std::size_t n = std::min(kRecordsPerPacket, cells.size() - b);
     e57::BitWriter rows, cols;
     for (std::string& s : streams) s.clear();
