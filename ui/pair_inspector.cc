@@ -1,13 +1,13 @@
 #include "ui/pair_inspector.h"
 
+#include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
 #include <QDockWidget>
 #include <QEvent>
 #include <QGraphicsItem>
 #include <QHeaderView>
 #include <QMouseEvent>
 #include <QTimer>
-#include <vtkRenderer.h>
-#include <vtkScalarBarActor.h>
 
 #include "core/features/feature_cache.h"
 #include "core/features/panorama.h"
@@ -36,8 +36,8 @@ Expected<ScanFeatures> Features(const Scan& scan, const pipeline::RegisterOption
 
 // The link's methods ("3d+dense") when the project holds the pair.
 std::optional<std::pair<CoarseMethod, pipeline::FineMethod>> LinkMethods(const io::Project& project,
-                                                                        const std::string& parent,
-                                                                        const std::string& child) {
+                                                                         const std::string& parent,
+                                                                         const std::string& child) {
   for (const io::LinkRecord& l : project.links) {
     if (l.parent != parent || l.child != child) continue;
     for (CoarseMethod c : pipeline::AllCoarseMethods())
@@ -144,13 +144,24 @@ void PairInspector::OnProjectChanged() {
   panel_->ShowMessage("-", "");
 }
 
-void PairInspector::StartOrQueue(std::function<bool()> start) {
+void PairInspector::StartOrQueue(std::function<bool()>* slot, std::function<bool()> start) {
   if (window_->jobs()->busy()) {
-    queued_ = std::move(start);
+    *slot = std::move(start);
     return;
   }
-  queued_ = nullptr;
+  *slot = nullptr;
   start();
+}
+
+void PairInspector::StartQueued() {
+  if (!queued_pair_ && !queued_scan_) return;
+  QTimer::singleShot(0, this, [this] {
+    if (queued_pair_) {
+      StartOrQueue(&queued_pair_, queued_pair_);
+    } else if (queued_scan_) {
+      StartOrQueue(&queued_scan_, queued_scan_);
+    }
+  });
 }
 
 bool PairInspector::Start(const QString& title,
@@ -167,19 +178,19 @@ bool PairInspector::ShowScan(const QString& name) {
     return true;
   }
   panorama_->ShowMessage(tr("Computing the panorama of %1…").arg(name));
-  StartOrQueue([this, name] {
+  StartOrQueue(&queued_scan_, [this, name] {
     const int i = window_->project().FindScan(name.toStdString());
     if (i < 0 || i >= static_cast<int>(window_->scans().size())) return false;
     // A copy for the worker: core data are never shared between threads.
-    return Start(tr("Panorama of %1").arg(name), [scan = window_->scans()[i], name,
-                                                   options = window_->RegistrationOptions()](
-                                                      ProgressSink& progress, const CancelToken& cancel) {
-      progress.Report(0.1, "features of " + scan.name);
-      Expected<ScanFeatures> features = Features(scan, options);
-      if (!features) return Expected<std::any>(features.error());
-      if (cancel.IsCancelled()) return Expected<std::any>(MakeError(ErrorCode::kCancelled, "cancelled"));
-      return Expected<std::any>(std::any(PanoramaImage{name, ReflectancePanorama(scan), features->keypoints}));
-    });
+    return Start(
+        tr("Panorama of %1").arg(name), [scan = window_->scans()[i], name, options = window_->RegistrationOptions()](
+                                            ProgressSink& progress, const CancelToken& cancel) {
+          progress.Report(0.1, "features of " + scan.name);
+          Expected<ScanFeatures> features = Features(scan, options);
+          if (!features) return Expected<std::any>(features.error());
+          if (cancel.IsCancelled()) return Expected<std::any>(MakeError(ErrorCode::kCancelled, "cancelled"));
+          return Expected<std::any>(std::any(PanoramaImage{name, ReflectancePanorama(scan), features->keypoints}));
+        });
   });
   return true;
 }
@@ -204,33 +215,46 @@ bool PairInspector::RunPair() {
   }
   panel_->ShowMessage(tr("waiting…"), window_->jobs()->busy() ? tr("starts when the running job ends") : "");
   panorama_->ShowMessage(tr("Registering %1 to %2…").arg(child, parent));
-  StartOrQueue([this, p, c] {
+  StartOrQueue(&queued_pair_, [this, parent, child] {
+    // Looked up again: a queued request starts after another job, which may have changed the project.
+    const int p = window_->project().FindScan(parent.toStdString());
+    const int c = window_->project().FindScan(child.toStdString());
+    if (p < 0 || c < 0 || std::max(p, c) >= static_cast<int>(window_->scans().size())) {
+      panel_->SetRunning(false);
+      panel_->ShowMessage(tr("not run"), tr("the scans are no longer in the project"));
+      return false;
+    }
     pipeline::RegisterOptions options = window_->RegistrationOptions();
     options.coarse.method = panel_->coarseMethod();
     options.fine = panel_->fineMethod();
     const Scan& ps = window_->scans()[p];
     const Scan& cs = window_->scans()[c];
-    const QString title = tr("Pair registration %1 → %2").arg(QString::fromStdString(cs.name),
-                                                               QString::fromStdString(ps.name));
-    const bool started = Start(title, [parent = ps, child = cs, options](ProgressSink& progress,
-                                                                       const CancelToken& cancel) {
-      Expected<pipeline::PairInspection> r = pipeline::InspectPair(parent, child, options, {}, progress, cancel);
-      if (!r) return Expected<std::any>(r.error());
-      PairJobResult out;
-      out.parent = {QString::fromStdString(parent.name), ReflectancePanorama(parent), r->parent_features.keypoints};
-      out.child = {QString::fromStdString(child.name), ReflectancePanorama(child), r->child_features.keypoints};
-      out.inspection = std::move(*r);
-      return Expected<std::any>(std::any(std::move(out)));
-    });
-    if (started) panel_->SetRunning(true);
+    const QString title =
+        tr("Pair registration %1 → %2").arg(QString::fromStdString(cs.name), QString::fromStdString(ps.name));
+    const bool started =
+        Start(title, [parent = ps, child = cs, options](ProgressSink& progress, const CancelToken& cancel) {
+          Expected<pipeline::PairInspection> r = pipeline::InspectPair(parent, child, options, {}, progress, cancel);
+          if (!r) return Expected<std::any>(r.error());
+          PairJobResult out;
+          out.parent = {QString::fromStdString(parent.name), ReflectancePanorama(parent), r->parent_features.keypoints};
+          out.child = {QString::fromStdString(child.name), ReflectancePanorama(child), r->child_features.keypoints};
+          out.inspection = std::move(*r);
+          return Expected<std::any>(std::any(std::move(out)));
+        });
+    panel_->SetRunning(started);
     return started;
   });
+  if (queued_pair_) panel_->SetRunning(true);  // waiting: Cancel withdraws the request
   return true;
 }
 
 void PairInspector::CancelPair() {
-  queued_ = nullptr;
-  if (!running_.isEmpty()) window_->jobs()->Cancel();
+  if (queued_pair_) {
+    panel_->SetRunning(false);
+    panel_->ShowMessage(tr("cancelled"), tr("the project is unchanged"));
+  }
+  queued_pair_ = nullptr;
+  if (running_.startsWith(tr("Pair registration"))) window_->jobs()->Cancel();
 }
 
 void PairInspector::OnJobSucceeded(const QString& title, const std::any& result) {
@@ -239,6 +263,7 @@ void PairInspector::OnJobSucceeded(const QString& title, const std::any& result)
     if (const auto* pano = std::any_cast<PanoramaImage>(&result)) {
       panoramas_[pano->scan] = *pano;
       panorama_->ShowScan(*pano);
+      GrowPanoramaDockOnce();
     } else if (const auto* pair = std::any_cast<PairJobResult>(&result)) {
       panoramas_[pair->parent.scan] = pair->parent;
       panoramas_[pair->child.scan] = pair->child;
@@ -246,20 +271,18 @@ void PairInspector::OnJobSucceeded(const QString& title, const std::any& result)
       panel_->SetRunning(false);
       panel_->ShowResult(pair->inspection);
       panorama_->ShowPair(pair->parent, pair->child, pair->inspection.matches, pair->inspection.coarse_inlier);
-      // Two stacked panoramas need height: grow a low panorama dock once (the user's layout wins after).
-      if (!grew_panorama_ && pano_dock_->height() < 300) window_->resizeDocks({pano_dock_}, {360}, Qt::Vertical);
-      grew_panorama_ = true;
+      GrowPanoramaDockOnce();
       ShowOverlay();
     }
   }
-  if (queued_) QTimer::singleShot(0, this, [this] { if (queued_) StartOrQueue(queued_); });
+  StartQueued();
 }
 
 void PairInspector::OnJobFailed(const QString& title, const QString& message, bool cancelled) {
   if (title == running_) {
     running_.clear();
-    panel_->SetRunning(false);
     if (title.startsWith(tr("Pair registration"))) {
+      panel_->SetRunning(false);
       panel_->ShowMessage(cancelled ? tr("cancelled") : tr("error"),
                           cancelled ? tr("the project is unchanged") : message);
       panorama_->ShowMessage(cancelled ? tr("Pair registration cancelled.") : message);
@@ -267,7 +290,13 @@ void PairInspector::OnJobFailed(const QString& title, const QString& message, bo
       panorama_->ShowMessage(cancelled ? tr("Cancelled.") : message);
     }
   }
-  if (queued_) QTimer::singleShot(0, this, [this] { if (queued_) StartOrQueue(queued_); });
+  StartQueued();
+}
+
+void PairInspector::GrowPanoramaDockOnce() {
+  // The first panorama shown gets room (a pair stacks two); the user's layout wins after that.
+  if (!grew_panorama_ && pano_dock_->height() < 300) window_->resizeDocks({pano_dock_}, {360}, Qt::Vertical);
+  grew_panorama_ = true;
 }
 
 void PairInspector::ShowOverlay() {

@@ -47,9 +47,12 @@ class PairInspector : public QObject {
   void OnProjectChanged();
   void OnJobSucceeded(const QString& title, const std::any& result);
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
-  void StartOrQueue(std::function<bool()> start);
+  // Starts now, or keeps the request in *slot until the running job ends (the latest wins).
+  void StartOrQueue(std::function<bool()>* slot, std::function<bool()> start);
+  void StartQueued();  // after a job: the waiting pair first, else the waiting panorama
   bool Start(const QString& title, std::function<Expected<std::any>(ProgressSink&, const CancelToken&)> job);
   void ShowOverlay();
+  void GrowPanoramaDockOnce();
   void UseResult();
 
   MainWindow* window_;
@@ -60,8 +63,8 @@ class PairInspector : public QObject {
   std::map<QString, PanoramaImage> panoramas_;  // computed panoramas by scan name (this project)
   const void* scans_identity_ = nullptr;        // the window's scans these panoramas belong to
   std::optional<pipeline::PairInspection> last_pair_;
-  QString running_;                             // title of this inspector's running job
-  std::function<bool()> queued_;
+  QString running_;  // title of this inspector's running job
+  std::function<bool()> queued_pair_, queued_scan_;
 };
 
 }  // namespace scanreg::ui

@@ -64,14 +64,20 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
 
   auto* evidence = new QGroupBox(tr("Evidence"), this);
   auto* form = new QFormLayout(evidence);
-  const std::pair<const char*, QString> rows[] = {
-      {"status", tr("Status")},           {"reason", tr("Reason")},
-      {"method", tr("Method")},           {"matches", tr("Feature matches")},
-      {"reliable", tr("Reliable 3D pairs")}, {"inliers", tr("Coarse inliers")},
-      {"consistent", tr("Consistent")},   {"rms", tr("RMS (overlap)")},
-      {"overlap", tr("Overlap")},         {"conflict", tr("Free-space conflict")},
-      {"iterations", tr("Iterations")},   {"time", tr("Time")},
-      {"error", tr("Error vs reference")}, {"coarse_error", tr("Coarse error vs reference")}};
+  const std::pair<const char*, QString> rows[] = {{"status", tr("Status")},
+                                                  {"reason", tr("Reason")},
+                                                  {"method", tr("Method")},
+                                                  {"matches", tr("Feature matches")},
+                                                  {"reliable", tr("Reliable 3D pairs")},
+                                                  {"inliers", tr("Coarse inliers")},
+                                                  {"consistent", tr("Consistent")},
+                                                  {"rms", tr("RMS (overlap)")},
+                                                  {"overlap", tr("Overlap")},
+                                                  {"conflict", tr("Free-space conflict")},
+                                                  {"iterations", tr("Iterations")},
+                                                  {"time", tr("Time")},
+                                                  {"error", tr("Error vs reference")},
+                                                  {"coarse_error", tr("Coarse error vs reference")}};
   for (const auto& [key, label] : rows) {
     auto* value = new QLabel("-", evidence);
     value->setObjectName(QString("Evidence_") + key);

@@ -45,8 +45,10 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   const std::vector<int> moved = project.scans[c].registered ? Subtree(project, c) : std::vector<int>{c};
   if (std::find(moved.begin(), moved.end(), p) != moved.end()) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + link.parent + "' is registered through '" + link.child +
-                                                      "'; registering " + link.child + " to it would make a cycle. "
-                                                      "Change the parent of " + link.parent + " first");
+                                                      "'; registering " + link.child +
+                                                      " to it would make a cycle. "
+                                                      "Change the parent of " +
+                                                      link.parent + " first");
   }
   std::string old_parent;
   for (const io::LinkRecord& l : project.links)

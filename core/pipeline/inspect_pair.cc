@@ -2,10 +2,10 @@
 
 #include "core/features/confusion.h"
 #include "core/features/feature_cache.h"
+#include "core/pipeline/register_project.h"
 #include "core/registration/point_index.h"
 #include "core/registration/surface_distance.h"
 #include "core/registration/voxel_filter.h"
-#include "core/pipeline/register_project.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -44,8 +44,7 @@ void Overlay(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen
 }  // namespace
 
 Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, const RegisterOptions& options,
-                                     const InspectOptions& inspect, ProgressSink& progress,
-                                     const CancelToken& cancel) {
+                                     const InspectOptions& inspect, ProgressSink& progress, const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
   for (const Scan* s : {&parent, &child}) {
     if (s->CountValid() == 0) {

@@ -35,14 +35,13 @@ struct PairInspection {
 };
 
 struct InspectOptions {
-  bool overlay = true;             // compute the overlay points and distances
-  int overlay_points = 60000;      // per scan, evenly thinned from the valid points
+  bool overlay = true;         // compute the overlay points and distances
+  int overlay_points = 60000;  // per scan, evenly thinned from the valid points
 };
 
 // Errors: a scan without valid points or invalid options (kInvalidArgument), cancel (kCancelled).
 // A registration that fails is not an error: result.link says why (status kFailed, reason).
 Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, const RegisterOptions& options,
-                                     const InspectOptions& inspect, ProgressSink& progress,
-                                     const CancelToken& cancel);
+                                     const InspectOptions& inspect, ProgressSink& progress, const CancelToken& cancel);
 
 }  // namespace scanreg::pipeline

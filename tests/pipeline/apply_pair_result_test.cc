@@ -17,7 +17,8 @@ io::LinkRecord Link(const io::Project& p, const std::string& parent, const std::
   l.parent = parent;
   l.child = child;
   l.status = io::LinkStatus::kOk;
-  l.parent_from_child = p.scans[p.FindScan(parent)].world_from_scan.inverse() * p.scans[p.FindScan(child)].world_from_scan;
+  l.parent_from_child =
+      p.scans[p.FindScan(parent)].world_from_scan.inverse() * p.scans[p.FindScan(child)].world_from_scan;
   return l;
 }
 
