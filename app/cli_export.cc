@@ -15,7 +15,8 @@ int RunExportClouds(const std::vector<std::string>& argv) {
        {"format", true, false, "ptx|e57|ply   file format (default ptx)"},
        {"apply-poses", false, false,
         "       write world coordinates (pose applied to the points, identity pose in the header);\n"
-        "                     default: points in the scanner frame, the registered pose kept in the header"}},
+        "                     default: points in the scanner frame, the registered pose kept in the header (lossless;\n"
+        "                     applied world coordinates are floats: 1 mm steps 10 km from the origin)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
