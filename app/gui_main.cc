@@ -1,11 +1,14 @@
 // scanreg: the desktop application.
 //   --demo              open the simulated demo project (and register it with --register)
 //   --screenshot FILE   render the main window to a PNG once the jobs are done, then exit
+//   --screenshots DIR   open, register and merge the demo project, save a PNG of each main view
 // (the last two are how the GUI is checked under Xvfb).
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QDir>
+#include <QSettings>
 #include <QSurfaceFormat>
+#include <QTemporaryDir>
 #include <QTimer>
 #include <QVTKOpenGLNativeWidget.h>
 
@@ -13,6 +16,7 @@
 
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/screenshot_tour.h"
 
 int main(int argc, char** argv) {
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
@@ -28,12 +32,31 @@ int main(int argc, char** argv) {
   QCommandLineOption demo("demo", "Open the simulated demo project.");
   QCommandLineOption reg("register", "Register the opened project.");
   QCommandLineOption screenshot("screenshot", "Render the main window to FILE (PNG) when done, and exit.", "FILE");
-  parser.addOptions({demo, reg, screenshot});
+  QCommandLineOption screenshots("screenshots", "Open, register and merge the demo project, save a PNG of each "
+                                 "main view into DIR, and exit.", "DIR");
+  parser.addOptions({demo, reg, screenshot, screenshots});
   parser.addPositionalArgument("project", "A project file (*.scanreg.json) to open.", "[project]");
   parser.process(app);
 
+  // Screenshots do not depend on (or change) the user's settings: they get their own, empty ones.
+  QTemporaryDir settings_dir;
+  if (parser.isSet(screenshots)) {
+    QSettings::setDefaultFormat(QSettings::IniFormat);
+    QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, settings_dir.path());
+  }
+
   scanreg::ui::MainWindow window;
   window.show();
+  if (parser.isSet(screenshots)) {
+    window.resize(1500, 940);
+    auto* tour = new scanreg::ui::ScreenshotTour(&window, parser.value(screenshots));
+    QObject::connect(tour, &scanreg::ui::ScreenshotTour::Finished, &window, [](bool ok, const QString& message) {
+      std::fprintf(ok ? stdout : stderr, "scanreg: %s\n", qPrintable(message));
+      QApplication::exit(ok ? 0 : 1);
+    });
+    tour->StartDemo(settings_dir.filePath("demo"));
+    return app.exec();
+  }
   const QString shot = parser.value(screenshot);
   auto finish = [&window, shot] {
     if (shot.isEmpty()) return;

@@ -5,6 +5,7 @@
 #include <QCloseEvent>
 #include <QDockWidget>
 #include <QFileDialog>
+#include <QFileInfo>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QPainter>
@@ -21,11 +22,16 @@
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
+#include "core/io/scan_file.h"
+#include "core/report/report.h"
+#include "ui/app_settings.h"
 #include "ui/job_runner.h"
+#include "ui/merge_panel.h"
 #include "ui/network_panel.h"
 #include "ui/pair_inspector.h"
 #include "ui/project_panels.h"
 #include "ui/scan_cloud_actors.h"
+#include "ui/scan_scene.h"
 #include "ui/view_3d.h"
 
 namespace scanreg::ui {
@@ -46,6 +52,12 @@ class EditCommand : public QUndoCommand {
 };
 
 struct LoadedProject {
+  io::Project project;
+  std::vector<Scan> scans;
+};
+
+// Scans read for the open project (Add scans): the project with them appended, and the scans.
+struct AddedScans {
   io::Project project;
   std::vector<Scan> scans;
 };
@@ -71,6 +83,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   view3d_ = new View3d(this);
   view3d_->setObjectName("View3d");
   setCentralWidget(view3d_);
+  scene_ = new ScanScene(view3d_, this);
+  scene_->SetColouring(QSettings().value("view/colour_by_reflectance").toBool() ? CloudColouring::kReflectance
+                                                                                : CloudColouring::kPerScan);
   CreateDocks();
   CreateMenus();
 
@@ -121,32 +136,67 @@ void MainWindow::CreateDocks() {
   confusion_panel_ = new ConfusionPanel(this);
   network_ = new NetworkPanel(this);
   log_ = new LogPanel(this);
+  merge_panel_ = new MergePanel(this, scene_);
+  connect(scan_list_, &ScanListPanel::ScanVisibilityChanged, scene_, &ScanScene::SetScanVisible);
   connect(network_, &NetworkPanel::ParentOverrideRequested, this, &MainWindow::SetParentOverride);
   connect(network_, &NetworkPanel::LinkDecisionRequested, this, &MainWindow::SetLinkDecision);
   const std::pair<QWidget*, QString> docks[] = {{scan_list_, tr("Scans")},
                                                 {network_, tr("Scan network")},
                                                 {confusion_panel_, tr("Confusion matrix")},
+                                                {merge_panel_, tr("Merge")},
                                                 {log_, tr("Log")}};
+  QDockWidget* first_right = nullptr;
   for (const auto& [widget, title] : docks) {
     auto* dock = new QDockWidget(title, this);
     dock->setObjectName(widget->objectName() + "Dock");
     dock->setWidget(widget);
     addDockWidget(widget == log_ ? Qt::BottomDockWidgetArea : Qt::RightDockWidgetArea, dock);
+    if (widget == merge_panel_) tabifyDockWidget(first_right, dock);  // a tab beside the scan list
+    if (!first_right && widget != log_) first_right = dock;
   }
+  first_right->raise();
 }
 
 void MainWindow::CreateMenus() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->setObjectName("FileMenu");
+  // "*.ptx *.ply *.pcd" from io::SupportedScanExtensions() (".ptx, .ply, .pcd").
+  const QString scan_filter = tr("Scans (%1);;All files (*)")
+                                  .arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
+  QAction* create = file->addAction(tr("&New project…"), this, [this, scan_filter] {
+    if (!MaybeSaveChanges()) return;
+    const QStringList files = QFileDialog::getOpenFileNames(this, tr("New project: choose the scans"), LastDir(),
+                                                            scan_filter);
+    if (files.isEmpty()) return;
+    RememberDir(files.first());
+    const QString path = QFileDialog::getSaveFileName(this, tr("New project: save it as"),
+                                                      LastDir() + "/project.scanreg.json",
+                                                      tr("scanreg projects (*.scanreg.json)"));
+    if (!path.isEmpty()) NewProject(files, path);
+  });
+  create->setShortcut(QKeySequence::New);
   QAction* open = file->addAction(tr("&Open project…"), this, [this] {
-    const QString path = QFileDialog::getOpenFileName(this, tr("Open project"), QString(),
+    if (!MaybeSaveChanges()) return;
+    const QString path = QFileDialog::getOpenFileName(this, tr("Open project"), LastDir(),
                                                       tr("scanreg projects (*.scanreg.json);;All files (*)"));
-    if (!path.isEmpty()) OpenProject(path);
+    if (path.isEmpty()) return;
+    RememberDir(path);
+    OpenProject(path);
   });
   open->setShortcut(QKeySequence::Open);
+  QMenu* recent = file->addMenu(tr("Open &recent"));
+  recent->setObjectName("RecentMenu");
+  connect(recent, &QMenu::aboutToShow, this, [this, recent] { FillRecentMenu(recent); });
   file->addAction(tr("Open &demo project"), this, [this] {
+    if (!MaybeSaveChanges()) return;
     const QString dir = QStandardPaths::writableLocation(QStandardPaths::TempLocation) + "/scanreg-demo";
     OpenDemoProject(dir);
+  });
+  QAction* add = file->addAction(tr("&Add scans…"), this, [this, scan_filter] {
+    const QStringList files = QFileDialog::getOpenFileNames(this, tr("Add scans"), LastDir(), scan_filter);
+    if (files.isEmpty()) return;
+    RememberDir(files.first());
+    AddScans(files);
   });
   QAction* save = file->addAction(tr("&Save project"), this, [this] { SaveProject(QString::fromStdString(project_.file.string())); });
   save->setShortcut(QKeySequence::Save);
@@ -154,6 +204,12 @@ void MainWindow::CreateMenus() {
     const QString path = QFileDialog::getSaveFileName(this, tr("Save project as"), QString(),
                                                       tr("scanreg projects (*.scanreg.json)"));
     if (!path.isEmpty()) SaveProject(path);
+  });
+  QAction* report = file->addAction(tr("Export &report…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Export report into folder"), LastDir());
+    if (dir.isEmpty()) return;
+    RememberDir(dir);
+    ExportReport(dir);
   });
   file->addSeparator();
   QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
@@ -170,16 +226,24 @@ void MainWindow::CreateMenus() {
   QMenu* reg = menuBar()->addMenu(tr("&Registration"));
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
   run->setShortcut(Qt::CTRL | Qt::Key_R);
-  project_actions_ = {save, save_as, run};
+  project_actions_ = {save, save_as, run, add, report};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
   QAction* refl = view->addAction(tr("Colour by &reflectance"));
+  refl->setObjectName("ColourByReflectance");
   refl->setCheckable(true);
+  refl->setChecked(scene_->colouring() == CloudColouring::kReflectance);
   connect(refl, &QAction::toggled, this, [this](bool on) {
-    colour_by_reflectance_ = on;
-    Refresh();
+    scene_->SetColouring(on ? CloudColouring::kReflectance : CloudColouring::kPerScan);
+    QSettings().setValue("view/colour_by_reflectance", on);
   });
+  QAction* full = view->addAction(tr("&Full resolution"));
+  full->setObjectName("FullResolution");
+  full->setCheckable(true);
+  full->setToolTip(tr("Draw every point (a subset while the camera moves); otherwise at most %L1 points in all.")
+                       .arg(ScanScene::kDecimatedPoints));
+  connect(full, &QAction::toggled, scene_, &ScanScene::SetFullResolution);
 
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&About scanreg"), this, &MainWindow::ShowAbout);
@@ -295,6 +359,7 @@ void MainWindow::ApplyEdit(const io::Project& project, bool rerun) {
   for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
     scans_[i].world_from_scan = project_.scans[i].world_from_scan;
   dirty_ = true;
+  emit PosesChanged();
   Refresh();
   if (rerun && !jobs_->busy()) RegisterProject();
 }
@@ -305,15 +370,25 @@ void MainWindow::OnJobSucceeded(const QString& title, std::any result) {
     project_ = std::move(loaded->project);
     scans_ = std::move(loaded->scans);
     undo_->clear();
-    confusion_.resize(0, 0);
+    const Eigen::MatrixXi* saved = project_.CurrentConfusion();  // from the last registration, if any
+    confusion_ = saved ? *saved : Eigen::MatrixXi();
     dirty_ = false;
-    QSettings().setValue("recent/project", QString::fromStdString(project_.file.string()));
+    AddRecentProject(QString::fromStdString(project_.file.string()));
+    emit PosesChanged();
+  } else if (auto* added = std::any_cast<AddedScans>(&result)) {
+    project_ = std::move(added->project);
+    for (Scan& s : added->scans) scans_.push_back(std::move(s));
+    undo_->clear();  // the snapshots hold fewer scans
+    confusion_.resize(0, 0);
+    dirty_ = true;
+    emit PosesChanged();
   } else if (auto* reg = std::any_cast<Registered>(&result)) {
     project_ = std::move(reg->project);
     confusion_ = reg->confusion;
     for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
       scans_[i].world_from_scan = project_.scans[i].world_from_scan;
     dirty_ = true;
+    emit PosesChanged();
   }
   SetBusy(false);
   Refresh();
@@ -333,7 +408,7 @@ void MainWindow::Refresh() {
   scan_list_->Show(project_, scans_);
   std::vector<std::string> names;
   for (const io::ProjectScan& s : project_.scans) names.push_back(s.name);
-  if (confusion_.size() > 0) confusion_panel_->Show(confusion_, names);
+  confusion_panel_->Show(confusion_, names);  // empty when there is none: no stale matrix
   network_->Show(project_);
   bool any_registered = false;
   for (const io::ProjectScan& s : project_.scans) any_registered |= s.registered;
@@ -341,9 +416,7 @@ void MainWindow::Refresh() {
   io::Project shown = project_;
   if (!any_registered)
     for (io::ProjectScan& s : shown.scans) s.registered = true;
-  view3d_->SetActors(MakeScanActors(scans_, shown,
-                                    colour_by_reflectance_ ? CloudColouring::kReflectance : CloudColouring::kPerScan,
-                                    150000));
+  scene_->ShowScans(shown, scans_);
   setWindowTitle(tr("scanreg — %1").arg(QString::fromStdString(project_.file.filename().string())));
   emit ProjectChanged();
 }
@@ -356,16 +429,79 @@ void MainWindow::ShowError(const QString& title, const QString& message) {
   box->open();  // window-modal, does not block the event loop
 }
 
+bool MainWindow::MaybeSaveChanges() {
+  if (!dirty_) return true;
+  QMessageBox box(QMessageBox::Question, tr("Unsaved changes"),
+                  tr("The changes to %1 have not been saved. Save them first?")
+                      .arg(QString::fromStdString(project_.file.filename().string())),
+                  QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, this);
+  box.setObjectName("UnsavedChangesDialog");
+  const int answer = box.exec();
+  if (answer == QMessageBox::Cancel) return false;
+  return answer == QMessageBox::Discard || SaveProject(QString::fromStdString(project_.file.string()));
+}
+
+void MainWindow::FillRecentMenu(QMenu* menu) {
+  const QStringList missing = RemoveMissingRecentProjects();
+  if (!missing.isEmpty()) {
+    statusBar()->showMessage(tr("Removed from the recent projects (the files no longer exist): %1")
+                                 .arg(missing.join(", ")),
+                             10000);
+    LogWarning("removed from the recent projects, the files no longer exist: " + missing.join(", ").toStdString());
+  }
+  menu->clear();
+  for (const QString& path : RecentProjects()) {
+    menu->addAction(QFileInfo(path).fileName() + "  —  " + QFileInfo(path).absolutePath(), this, [this, path] {
+      if (MaybeSaveChanges()) OpenProject(path);
+    });
+  }
+  if (menu->isEmpty()) menu->addAction(tr("(no recent projects)"))->setEnabled(false);
+}
+
+bool MainWindow::NewProject(const QStringList& scan_files, const QString& project_path) {
+  std::vector<std::filesystem::path> files;
+  for (const QString& f : scan_files) files.push_back(f.toStdString());
+  return jobs_->Start(tr("Creating %1").arg(project_path), [files, path = project_path.toStdString()](
+                                                               ProgressSink& progress, const CancelToken& cancel) {
+    io::Project project;
+    project.file = std::filesystem::absolute(path);
+    Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
+    if (!scans) return Expected<std::any>(scans.error());
+    if (Status s = io::SaveProject(project, path); !s) return Expected<std::any>(s.error());
+    return Expected<std::any>(std::any(LoadedProject{std::move(project), std::move(*scans)}));
+  });
+}
+
+bool MainWindow::AddScans(const QStringList& scan_files) {
+  if (project_.file.empty()) {
+    ShowError(tr("No project open"), tr("Create a project first (File → New project…), then add scans to it."));
+    return false;
+  }
+  std::vector<std::filesystem::path> files;
+  for (const QString& f : scan_files) files.push_back(f.toStdString());
+  return jobs_->Start(tr("Adding scans"), [files, project = project_](ProgressSink& progress,
+                                                                      const CancelToken& cancel) mutable {
+    Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
+    if (!scans) return Expected<std::any>(scans.error());
+    return Expected<std::any>(std::any(AddedScans{std::move(project), std::move(*scans)}));
+  });
+}
+
+bool MainWindow::ExportReport(const QString& dir) {
+  if (project_.scans.empty()) return false;
+  return jobs_->Start(tr("Writing the report to %1").arg(dir), [project = project_, dir = dir.toStdString()](
+                                                                   ProgressSink& progress, const CancelToken& cancel) {
+    Expected<std::filesystem::path> index = report::WriteReport(project, dir, progress, cancel);
+    if (!index) return Expected<std::any>(index.error());
+    LogInfo("report written: " + index->string());
+    return Expected<std::any>(std::any(*index));
+  });
+}
+
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (dirty_) {
-    const auto answer = QMessageBox::question(this, tr("Unsaved changes"),
-                                              tr("The registration has not been saved. Save it before closing?"),
-                                              QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel);
-    if (answer == QMessageBox::Cancel || (answer == QMessageBox::Save &&
-                                          !SaveProject(QString::fromStdString(project_.file.string())))) {
-      event->ignore();
-      return;
-    }
+  if (!MaybeSaveChanges()) {
+    event->ignore();
+    return;
   }
   QSettings settings;
   settings.setValue("window/geometry", saveGeometry());
@@ -380,6 +516,11 @@ void MainWindow::ShowAbout() {
 }
 
 bool MainWindow::SaveScreenshot(const QString& path) {
+  const QImage image = Screenshot();
+  return !image.isNull() && image.save(path);
+}
+
+QImage MainWindow::Screenshot() {
   QImage image = grab().toImage();
   // QWidget::grab() does not capture the OpenGL frame buffer; paint the VTK frame on top.
   const QImage frame = view3d_->GrabImage();
@@ -388,7 +529,7 @@ bool MainWindow::SaveScreenshot(const QString& path) {
     const QPoint origin = view3d_->vtkWidget()->mapTo(this, QPoint(0, 0));
     painter.drawImage(QRect(origin, view3d_->vtkWidget()->size()), frame);
   }
-  return !image.isNull() && image.save(path);
+  return image;
 }
 
 }  // namespace scanreg::ui

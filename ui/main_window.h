@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <QImage>
 #include <QMainWindow>
 #include <any>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "core/pipeline/register_options.h"
 
 class QAction;
+class QMenu;
 class QProgressBar;
 class QPushButton;
 class QUndoStack;
@@ -22,9 +24,11 @@ namespace scanreg::ui {
 class ConfusionPanel;
 class JobRunner;
 class LogPanel;
+class MergePanel;
 class NetworkPanel;
 class PairInspector;
 class ScanListPanel;
+class ScanScene;
 class View3d;
 
 class MainWindow : public QMainWindow {
@@ -46,6 +50,16 @@ class MainWindow : public QMainWindow {
   bool UsePairResult(const io::LinkRecord& link);
   // Redraws the panels and the 3D view from the project.
   void Refresh();
+  // A new project from scan files (io::SupportedScanExtensions()), saved at project_path; and
+  // scans added to the open project (unsaved until Save). Both read the files on the worker.
+  bool NewProject(const QStringList& scan_files, const QString& project_path);
+  bool AddScans(const QStringList& scan_files);
+  // Writes the registration report (dir/index.html and its pictures) on the worker.
+  bool ExportReport(const QString& dir);
+  // With unsaved changes, asks whether to save them; false when the user cancels (or saving failed).
+  bool MaybeSaveChanges();
+  // A dialog naming the problem and the next step (window-modal, does not block); also logged.
+  void ShowError(const QString& title, const QString& message);
 
   // The user's edits, undoable. A parent override re-runs the registration when no job runs.
   void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
@@ -63,12 +77,18 @@ class MainWindow : public QMainWindow {
   ConfusionPanel* confusionPanel() const { return confusion_panel_; }
   NetworkPanel* networkPanel() const { return network_; }
   PairInspector* pairInspector() const { return inspector_; }
+  ScanScene* scene() const { return scene_; }
+  MergePanel* mergePanel() const { return merge_panel_; }
   bool dirty() const { return dirty_; }
 
-  // Renders the window (including the VTK view) into a PNG; returns false on failure.
+  // The window as shown, including the VTK view's frame (null on failure); and saved as a PNG.
+  QImage Screenshot();
   bool SaveScreenshot(const QString& path);
 
  signals:
+  // The project's poses or scans were replaced (load, registration, edit): derived results such as
+  // a merged mesh no longer match.
+  void PosesChanged();
   void ProjectChanged();  // the panels were redrawn from the project (emitted by Refresh)
 
  protected:
@@ -80,14 +100,13 @@ class MainWindow : public QMainWindow {
   void OnJobSucceeded(const QString& title, std::any result);
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   void SetBusy(bool busy);
-  void ShowError(const QString& title, const QString& message);
   void ShowAbout();
+  void FillRecentMenu(QMenu* menu);
 
   io::Project project_;
   std::vector<Scan> scans_;
   Eigen::MatrixXi confusion_;
   bool dirty_ = false;
-  bool colour_by_reflectance_ = false;
 
   JobRunner* jobs_ = nullptr;
   View3d* view3d_ = nullptr;
@@ -96,6 +115,8 @@ class MainWindow : public QMainWindow {
   LogPanel* log_ = nullptr;
   NetworkPanel* network_ = nullptr;
   PairInspector* inspector_ = nullptr;
+  ScanScene* scene_ = nullptr;
+  MergePanel* merge_panel_ = nullptr;
   QUndoStack* undo_ = nullptr;
   QProgressBar* progress_ = nullptr;
   QPushButton* cancel_ = nullptr;

@@ -52,6 +52,9 @@ NetworkPanel::NetworkPanel(QWidget* parent) : QGraphicsView(parent) {
   setScene(new QGraphicsScene(this));
   setRenderHint(QPainter::Antialiasing);
   setMinimumSize(240, 200);
+  // The view fits the network on resize; scroll bars appearing and vanishing would re-fit it forever.
+  setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  setVerticalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
 }
 
 void NetworkPanel::Show(const io::Project& project) {

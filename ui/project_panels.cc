@@ -25,16 +25,32 @@ ScanListPanel::ScanListPanel(QWidget* parent) : QTableWidget(parent) {
   verticalHeader()->hide();
   horizontalHeader()->setStretchLastSection(true);
   setSelectionBehavior(QAbstractItemView::SelectRows);
+  connect(this, &QTableWidget::itemChanged, this, [this](QTableWidgetItem* item) {
+    if (item->column() != 0 || !(item->flags() & Qt::ItemIsUserCheckable)) return;
+    const bool visible = item->checkState() == Qt::Checked;
+    if (visible == !hidden_.contains(item->text())) return;
+    if (visible) {
+      hidden_.remove(item->text());
+    } else {
+      hidden_.insert(item->text());
+    }
+    emit ScanVisibilityChanged(item->text(), visible);
+  });
 }
 
 void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& scans) {
+  const QSignalBlocker blocker(this);  // the check boxes are set, not changed by the user
   setRowCount(static_cast<int>(project.scans.size()));
   // Errors relative to the root, so that the datum of the registration does not matter.
   const int root = project.root ? project.FindScan(*project.root) : -1;
   for (int i = 0; i < rowCount(); ++i) {
     const io::ProjectScan& s = project.scans[i];
     const Scan* scan = i < static_cast<int>(scans.size()) ? &scans[i] : nullptr;
-    setItem(i, 0, Item(QString::fromStdString(s.name), Qt::AlignLeft | Qt::AlignVCenter));
+    QTableWidgetItem* name = Item(QString::fromStdString(s.name), Qt::AlignLeft | Qt::AlignVCenter);
+    name->setFlags(name->flags() | Qt::ItemIsUserCheckable);
+    name->setCheckState(hidden_.contains(name->text()) ? Qt::Unchecked : Qt::Checked);
+    name->setToolTip(tr("Uncheck to hide the scan in the 3D view"));
+    setItem(i, 0, name);
     setItem(i, 1, Item(scan ? QString("%1 × %2").arg(scan->cols).arg(scan->rows) : "-"));
     setItem(i, 2, Item(scan ? QString::number(scan->CountValid()) : "-"));
     QTableWidgetItem* status = Item(s.registered ? tr("registered") : tr("unregistered"), Qt::AlignCenter);

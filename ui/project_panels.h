@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <QPlainTextEdit>
+#include <QSet>
 #include <QTableWidget>
 #include <vector>
 
@@ -11,13 +12,20 @@
 
 namespace scanreg::ui {
 
-// One row per scan: name, grid size, valid points, status, position, error against the reference.
+// One row per scan: name (with a check box: shown in the 3D view), grid size, valid points,
+// status, position, error against the reference.
 class ScanListPanel : public QTableWidget {
   Q_OBJECT
 
  public:
   explicit ScanListPanel(QWidget* parent = nullptr);
   void Show(const io::Project& project, const std::vector<Scan>& scans);
+
+ signals:
+  void ScanVisibilityChanged(const QString& name, bool visible);
+
+ private:
+  QSet<QString> hidden_;  // scans the user unchecked; kept across Show()
 };
 
 // C(i, j) as a heat map with the counts; the diagonal (feature counts) in grey.

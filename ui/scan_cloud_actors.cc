@@ -2,11 +2,13 @@
 
 #include <vtkActor.h>
 #include <vtkCellArray.h>
-#include <vtkLine.h>
+#include <vtkCellData.h>
+#include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkLODActor.h>
+#include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
-#include <vtkCellData.h>
-#include <vtkPointData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
 #include <vtkSphereSource.h>
@@ -16,6 +18,119 @@
 #include <cmath>
 
 namespace scanreg::ui {
+namespace {
+
+// Points drawn by a full-resolution cloud while the camera moves.
+constexpr int kInteractivePointsPerScan = 60000;
+
+// Every step-th valid point (all when max_points is 0), as vertices with colours.
+vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen::Isometry3d& pose,
+                                                   const Eigen::Vector3d& origin, CloudColouring colouring,
+                                                   const double rgb[3], std::size_t max_points) {
+  const std::size_t valid = scan.CountValid();
+  const std::size_t step = max_points == 0 ? 1 : std::max<std::size_t>(1, (valid + max_points - 1) / max_points);
+  const std::size_t n = (valid + step - 1) / step;
+  auto xyz = vtkSmartPointer<vtkFloatArray>::New();
+  xyz->SetNumberOfComponents(3);
+  xyz->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  float* p = xyz->WritePointer(0, static_cast<vtkIdType>(3 * n));
+  unsigned char* c = colours->WritePointer(0, static_cast<vtkIdType>(3 * n));
+  const Eigen::Isometry3d shifted = Eigen::Translation3d(-origin) * pose;
+  std::size_t k = 0, out = 0;
+  for (std::size_t i = 0; i < scan.size() && out < n; ++i) {
+    if (!scan.valid[i] || (k++ % step) != 0) continue;
+    const Eigen::Vector3d q = shifted * scan.points[i].cast<double>();
+    for (int d = 0; d < 3; ++d) p[3 * out + d] = static_cast<float>(q[d]);
+    for (int d = 0; d < 3; ++d) {
+      c[3 * out + d] = colouring == CloudColouring::kReflectance
+                           ? static_cast<unsigned char>(std::clamp(scan.reflectance[i], 0.0f, 1.0f) * 255)
+                           : static_cast<unsigned char>(rgb[d] * 255);
+    }
+    ++out;
+  }
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetData(xyz);
+  auto ids = vtkSmartPointer<vtkIdTypeArray>::New();
+  ids->SetNumberOfValues(static_cast<vtkIdType>(n));
+  for (vtkIdType v = 0; v < static_cast<vtkIdType>(n); ++v) ids->SetValue(v, v);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(1, ids);
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  poly->GetPointData()->SetScalars(colours);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(poly);
+  return mapper;
+}
+
+// Full resolution (max_points 0): a level-of-detail actor that draws a decimated copy while the
+// camera moves. Its lower level is our own mapper (VTK's default ones copy the mapper's deprecated
+// shader settings and flood the log with warnings).
+vtkSmartPointer<vtkActor> MakeCloudActor(const Scan& scan, const Eigen::Isometry3d& pose, const Eigen::Vector3d& origin,
+                                         CloudColouring colouring, const double rgb[3], std::size_t max_points) {
+  vtkSmartPointer<vtkActor> actor;
+  if (max_points == 0) {
+    auto lod = vtkSmartPointer<vtkLODActor>::New();
+    lod->AddLODMapper(MakeCloudMapper(scan, pose, origin, colouring, rgb, kInteractivePointsPerScan));
+    actor = lod;
+  } else {
+    actor = vtkSmartPointer<vtkActor>::New();
+  }
+  actor->SetMapper(MakeCloudMapper(scan, pose, origin, colouring, rgb, max_points));
+  actor->GetProperty()->SetPointSize(2);
+  return actor;
+}
+
+vtkSmartPointer<vtkActor> MakeMarkerActor(const Eigen::Vector3d& centre, const double rgb[3]) {
+  auto sphere = vtkSmartPointer<vtkSphereSource>::New();
+  sphere->SetCenter(centre.x(), centre.y(), centre.z());
+  sphere->SetRadius(0.35);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputConnection(sphere->GetOutputPort());
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetColor(rgb[0], rgb[1], rgb[2]);
+  return actor;
+}
+
+// Links of the tree (ok: green, weak: orange), between scanner positions.
+vtkSmartPointer<vtkActor> MakeLinksActor(const io::Project& project, const Eigen::Vector3d& origin) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  auto lines = vtkSmartPointer<vtkCellArray>::New();
+  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colours->SetNumberOfComponents(3);
+  for (const io::LinkRecord& l : project.links) {
+    if (l.status == io::LinkStatus::kFailed) continue;
+    const int a = project.FindScan(l.parent), b = project.FindScan(l.child);
+    if (a < 0 || b < 0 || !project.scans[a].registered || !project.scans[b].registered) continue;
+    const Eigen::Vector3d pa = project.scans[a].world_from_scan.translation() - origin;
+    const Eigen::Vector3d pb = project.scans[b].world_from_scan.translation() - origin;
+    const vtkIdType ids[2] = {points->InsertNextPoint(pa.data()), points->InsertNextPoint(pb.data())};
+    lines->InsertNextCell(2, ids);
+    if (l.status == io::LinkStatus::kOk) {
+      colours->InsertNextTuple3(60, 220, 90);
+    } else {
+      colours->InsertNextTuple3(255, 160, 40);
+    }
+  }
+  if (lines->GetNumberOfCells() == 0) return nullptr;
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetLines(lines);
+  poly->GetCellData()->SetScalars(colours);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(poly);
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetLineWidth(3);
+  return actor;
+}
+
+}  // namespace
 
 void ScanColour(int index, double rgb[3]) {
   // Golden-angle hues: neighbouring indices get well separated colours.
@@ -27,98 +142,36 @@ void ScanColour(int index, double rgb[3]) {
   for (int k = 0; k < 3; ++k) rgb[k] = table[i % 6][k];
 }
 
-std::vector<vtkSmartPointer<vtkActor>> MakeScanActors(const std::vector<Scan>& scans, const io::Project& project,
-                                                      CloudColouring colouring, int max_points_per_scan) {
-  std::vector<vtkSmartPointer<vtkActor>> actors;
-  // Draw relative to the first registered scan's position so that UTM-sized coordinates keep
-  // their precision in VTK's float pipeline.
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < scans.size() && i < project.scans.size(); ++i) {
-    if (project.scans[i].registered) {
-      origin = project.scans[i].world_from_scan.translation();
-      break;
-    }
-  }
+std::vector<vtkSmartPointer<vtkActor>> ScanActors::All() const {
+  std::vector<vtkSmartPointer<vtkActor>> all;
+  for (const auto* group : {&clouds, &markers})
+    for (const auto& a : *group)
+      if (a) all.push_back(a);
+  if (links) all.push_back(links);
+  return all;
+}
+
+Eigen::Vector3d SceneOrigin(const io::Project& project) {
+  for (const io::ProjectScan& s : project.scans)
+    if (s.registered) return s.world_from_scan.translation();
+  return Eigen::Vector3d::Zero();
+}
+
+ScanActors MakeScanActors(const std::vector<Scan>& scans, const io::Project& project, CloudColouring colouring,
+                          std::size_t max_points_per_scan) {
+  ScanActors actors;
+  actors.clouds.resize(project.scans.size());
+  actors.markers.resize(project.scans.size());
+  const Eigen::Vector3d origin = SceneOrigin(project);
   for (std::size_t i = 0; i < scans.size() && i < project.scans.size(); ++i) {
     if (!project.scans[i].registered) continue;
-    const Scan& scan = scans[i];
     const Eigen::Isometry3d& pose = project.scans[i].world_from_scan;
-    const std::size_t valid = scan.CountValid();
-    const std::size_t step = std::max<std::size_t>(1, valid / std::max(1, max_points_per_scan));
-    auto points = vtkSmartPointer<vtkPoints>::New();
-    auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
-    colours->SetNumberOfComponents(3);
     double rgb[3];
     ScanColour(static_cast<int>(i), rgb);
-    std::size_t k = 0;
-    for (std::size_t c = 0; c < scan.size(); ++c) {
-      if (!scan.valid[c] || (k++ % step) != 0) continue;
-      const Eigen::Vector3d p = pose * scan.points[c].cast<double>() - origin;
-      points->InsertNextPoint(p.x(), p.y(), p.z());
-      if (colouring == CloudColouring::kReflectance) {
-        const unsigned char g = static_cast<unsigned char>(std::clamp(scan.reflectance[c], 0.0f, 1.0f) * 255);
-        colours->InsertNextTuple3(g, g, g);
-      } else {
-        colours->InsertNextTuple3(rgb[0] * 255, rgb[1] * 255, rgb[2] * 255);
-      }
-    }
-    auto verts = vtkSmartPointer<vtkCellArray>::New();
-    for (vtkIdType v = 0; v < points->GetNumberOfPoints(); ++v) verts->InsertNextCell(1, &v);
-    auto poly = vtkSmartPointer<vtkPolyData>::New();
-    poly->SetPoints(points);
-    poly->SetVerts(verts);
-    poly->GetPointData()->SetScalars(colours);
-    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-    mapper->SetInputData(poly);
-    auto actor = vtkSmartPointer<vtkActor>::New();
-    actor->SetMapper(mapper);
-    actor->GetProperty()->SetPointSize(2);
-    actors.push_back(actor);
-
-    // The scanner position.
-    auto sphere = vtkSmartPointer<vtkSphereSource>::New();
-    const Eigen::Vector3d s = pose.translation() - origin;
-    sphere->SetCenter(s.x(), s.y(), s.z());
-    sphere->SetRadius(0.35);
-    auto smapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-    smapper->SetInputConnection(sphere->GetOutputPort());
-    auto sactor = vtkSmartPointer<vtkActor>::New();
-    sactor->SetMapper(smapper);
-    sactor->GetProperty()->SetColor(rgb);
-    actors.push_back(sactor);
+    actors.clouds[i] = MakeCloudActor(scans[i], pose, origin, colouring, rgb, max_points_per_scan);
+    actors.markers[i] = MakeMarkerActor(pose.translation() - origin, rgb);
   }
-  // Links of the tree (ok: green, weak: orange), between scanner positions.
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  auto lines = vtkSmartPointer<vtkCellArray>::New();
-  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
-  colours->SetNumberOfComponents(3);
-  for (const io::LinkRecord& l : project.links) {
-    if (l.status == io::LinkStatus::kFailed) continue;
-    const int a = project.FindScan(l.parent), b = project.FindScan(l.child);
-    if (a < 0 || b < 0 || !project.scans[a].registered || !project.scans[b].registered) continue;
-    const Eigen::Vector3d pa = project.scans[a].world_from_scan.translation() - origin;
-    const Eigen::Vector3d pb = project.scans[b].world_from_scan.translation() - origin;
-    const vtkIdType ia = points->InsertNextPoint(pa.data()), ib = points->InsertNextPoint(pb.data());
-    const vtkIdType ids[2] = {ia, ib};
-    lines->InsertNextCell(2, ids);
-    if (l.status == io::LinkStatus::kOk) {
-      colours->InsertNextTuple3(60, 220, 90);
-    } else {
-      colours->InsertNextTuple3(255, 160, 40);
-    }
-  }
-  if (lines->GetNumberOfCells() > 0) {
-    auto poly = vtkSmartPointer<vtkPolyData>::New();
-    poly->SetPoints(points);
-    poly->SetLines(lines);
-    poly->GetCellData()->SetScalars(colours);
-    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-    mapper->SetInputData(poly);
-    auto actor = vtkSmartPointer<vtkActor>::New();
-    actor->SetMapper(mapper);
-    actor->GetProperty()->SetLineWidth(3);
-    actors.push_back(actor);
-  }
+  actors.links = MakeLinksActor(project, origin);
   return actors;
 }
 

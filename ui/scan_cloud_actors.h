@@ -1,10 +1,14 @@
-// Converts registered scans into VTK actors for the 3D view: one decimated point cloud per scan
-// (level of detail: at most `max_points_per_scan`), coloured per scan or by reflectance, the
-// scanner positions and the links of the scan tree.
+// Converts registered scans into VTK actors for the 3D view: one point cloud per scan, coloured
+// per scan or by reflectance, the scanner positions and the links of the scan tree.
+// Level of detail: a cloud is decimated to at most `max_points_per_scan` points (0 = every valid
+// point); full-resolution clouds are level-of-detail actors that draw a subset while the camera
+// moves, so a project of millions of points stays interactive.
 #pragma once
 
 #include <vtkSmartPointer.h>
 
+#include <Eigen/Core>
+#include <cstddef>
 #include <vector>
 
 #include "core/geometry/scan.h"
@@ -16,8 +20,20 @@ namespace scanreg::ui {
 
 enum class CloudColouring { kPerScan, kReflectance };
 
-std::vector<vtkSmartPointer<vtkActor>> MakeScanActors(const std::vector<Scan>& scans, const io::Project& project,
-                                                      CloudColouring colouring, int max_points_per_scan);
+struct ScanActors {
+  std::vector<vtkSmartPointer<vtkActor>> clouds;   // per project scan; null when the scan is not drawn
+  std::vector<vtkSmartPointer<vtkActor>> markers;  // scanner positions, per project scan (or null)
+  vtkSmartPointer<vtkActor> links;                 // the tree's links; null without links
+  std::vector<vtkSmartPointer<vtkActor>> All() const;  // the non-null actors
+};
+
+// The world point drawn at VTK's origin: the first registered scan's position, so that UTM-sized
+// coordinates keep their precision in VTK's float pipeline. Every actor of a scene uses it.
+Eigen::Vector3d SceneOrigin(const io::Project& project);
+
+// Draws the registered scans of `project` (scans[i] belongs to project.scans[i]).
+ScanActors MakeScanActors(const std::vector<Scan>& scans, const io::Project& project, CloudColouring colouring,
+                          std::size_t max_points_per_scan);
 
 // A distinct colour per scan index (RGB in [0, 1]).
 void ScanColour(int index, double rgb[3]);

@@ -48,9 +48,13 @@ void View3d::ResetCamera() {
   render_window_->Render();
 }
 
-void View3d::SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors) {
+void View3d::SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors, bool reset_camera) {
   renderer_->RemoveAllViewProps();
   for (const auto& a : actors) renderer_->AddActor(a);
+  if (!reset_camera) {
+    Render();
+    return;
+  }
   vtkCamera* camera = renderer_->GetActiveCamera();
   camera->SetPosition(-0.6, -1.0, 0.8);  // looking down the street from above, z up
   camera->SetFocalPoint(0, 0, 0);
@@ -58,6 +62,8 @@ void View3d::SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors) {
   renderer_->ResetCamera();
   render_window_->Render();
 }
+
+void View3d::Render() { render_window_->Render(); }
 
 QImage View3d::GrabImage() { return widget_->grabFramebuffer(); }
 

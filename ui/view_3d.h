@@ -26,8 +26,11 @@ class View3d : public QWidget {
   // Number of actors (clouds, meshes, markers) in the scene; the orientation marker is not one.
   int PropCount() const;
   void ResetCamera();
-  // Replaces the scene's actors (clouds, markers, links) and frames them, z up.
-  void SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors);
+  // Replaces the scene's actors (clouds, markers, links, meshes); with reset_camera, frames them
+  // looking down from above, z up (otherwise the camera stays where the user left it).
+  void SetActors(const std::vector<vtkSmartPointer<vtkActor>>& actors, bool reset_camera = true);
+  // Renders the scene again (after an actor's visibility or colour changed).
+  void Render();
   // Grabs the rendered frame buffer as an image (empty on failure).
   QImage GrabImage();
 

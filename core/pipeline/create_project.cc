@@ -44,21 +44,19 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
 
 }  // namespace
 
-Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
-                                    ProgressSink& progress, const CancelToken& cancel) {
-  if (options.scan_files.empty()) {
-    return MakeError(ErrorCode::kInvalidArgument, "a project needs at least one scan file");
-  }
-  io::Project project;
-  project.file = std::filesystem::absolute(project_path);
+Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
+                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel) {
+  io::Project result = project;
   std::set<std::string> names;
-  for (std::size_t f = 0; f < options.scan_files.size(); ++f) {
-    const std::filesystem::path path = std::filesystem::absolute(options.scan_files[f]).lexically_normal();
-    SubProgress sub(progress, double(f) / options.scan_files.size(), double(f + 1) / options.scan_files.size());
+  for (const io::ProjectScan& s : result.scans) names.insert(s.name);
+  std::vector<Scan> read;
+  for (std::size_t f = 0; f < scan_files.size(); ++f) {
+    const std::filesystem::path path = std::filesystem::absolute(scan_files[f]).lexically_normal();
+    SubProgress sub(progress, double(f) / scan_files.size(), double(f + 1) / scan_files.size());
     Expected<std::vector<Scan>> scans = io::ReadScanFile(path, sub, cancel);
     if (!scans) return scans.error();
     for (std::size_t k = 0; k < scans->size(); ++k) {
-      const Scan& scan = (*scans)[k];
+      Scan& scan = (*scans)[k];
       if (scan.CountValid() == 0) {
         return MakeError(ErrorCode::kInvalidArgument, "scan '" + scan.name + "' in '" + path.string() +
                                                           "' has no valid point; remove it from the list");
@@ -70,9 +68,23 @@ Expected<io::Project> CreateProject(const std::filesystem::path& project_path, c
       ps.index_in_file = static_cast<int>(k);
       ps.world_from_scan = scan.world_from_scan;
       ps.reference_world_from_scan = scan.reference_world_from_scan;
-      project.scans.push_back(std::move(ps));
+      scan.name = ps.name;
+      result.scans.push_back(std::move(ps));
+      if (keep_scans) read.push_back(std::move(scan));
     }
   }
+  project = std::move(result);
+  return read;
+}
+
+Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel) {
+  if (options.scan_files.empty()) {
+    return MakeError(ErrorCode::kInvalidArgument, "a project needs at least one scan file");
+  }
+  io::Project project;
+  project.file = std::filesystem::absolute(project_path);
+  if (auto scans = AppendScanFiles(project, options.scan_files, false, progress, cancel); !scans) return scans.error();
   for (const auto& [file, reference] : {std::make_pair(options.poses, false),
                                         std::make_pair(options.reference_poses, true)}) {
     if (!file) continue;

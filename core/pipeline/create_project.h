@@ -8,6 +8,7 @@
 
 #include "core/common/expected.h"
 #include "core/common/progress.h"
+#include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/simulate/project_sim.h"
 
@@ -26,6 +27,13 @@ struct CreateProjectOptions {
 // point is an error naming it. Pose-file entries that match no scan are an error too.
 Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
                                     ProgressSink& progress, const CancelToken& cancel);
+
+// Reads scan files and appends their scans to `project` (the GUI's Add scans): each scan named
+// uniquely within the project (a suffix on collision), its pose from the file. With keep_scans,
+// returns the scans read, in the order appended, named as in the project (otherwise an empty
+// list: each file's points are dropped once checked). On error `project` is unchanged.
+Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
+                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel);
 
 // Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
 // header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose

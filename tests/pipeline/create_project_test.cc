@@ -1,0 +1,90 @@
+// Creating a project from scan files and adding scans to it (the GUI's New project / Add scans):
+// unique names, poses from the files, the project unchanged on error.
+#include <gtest/gtest.h>
+
+#include "core/io/ptx.h"
+#include "core/pipeline/create_project.h"
+#include "tests/support/test_paths.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+// A small organized scan: a 10 x 20 grid on a plane 5 m in front of the scanner, every third cell empty.
+Scan PlaneScan(const std::string& name, double x) {
+  Scan scan(name, 10, 20);
+  for (int r = 0; r < scan.rows; ++r)
+    for (int c = 0; c < scan.cols; ++c)
+      if ((r * scan.cols + c) % 3 != 0) scan.Set(r, c, Eigen::Vector3f(5.0f, 0.1f * c, 0.1f * r), 0.5f);
+  scan.world_from_scan.translation() = Eigen::Vector3d(x, 0, 0);
+  return scan;
+}
+
+std::filesystem::path WritePtxFile(const test::TempDir& dir, const std::string& file, const std::vector<Scan>& scans) {
+  NullProgress progress;
+  const std::filesystem::path path = dir / file;
+  EXPECT_TRUE(io::WritePtx(path, scans, progress, CancelToken()).ok());
+  return path;
+}
+
+TEST(AppendScanFiles, NamesScansUniquelyAndKeepsTheirPoses) {
+  test::TempDir dir;
+  const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
+  // PTX names scans by file: "ab_1", "ab_2"; then a file whose one scan is "ab_1" again.
+  const auto a2 = WritePtxFile(dir, "ab_1.ptx", {PlaneScan("a", 3.0)});
+  io::Project project;
+  NullProgress progress;
+  auto first = AppendScanFiles(project, {ab}, true, progress, CancelToken());
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  auto second = AppendScanFiles(project, {a2}, true, progress, CancelToken());
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  ASSERT_EQ(project.scans.size(), 3u);
+  EXPECT_EQ(project.scans[0].name, "ab_1");
+  EXPECT_EQ(project.scans[1].name, "ab_2");
+  EXPECT_EQ(project.scans[2].name, "ab_1_2");
+  EXPECT_EQ(project.scans[1].index_in_file, 1);
+  ASSERT_EQ(second->size(), 1u);
+  EXPECT_EQ((*second)[0].name, "ab_1_2");
+  EXPECT_EQ((*second)[0].CountValid(), PlaneScan("a", 0).CountValid());
+  EXPECT_NEAR(project.scans[2].world_from_scan.translation().x(), 3.0, 1e-9);
+  EXPECT_NEAR(project.scans[1].world_from_scan.translation().x(), 2.0, 1e-9);
+}
+
+TEST(AppendScanFiles, WithoutKeepingScansReturnsNoneButAppends) {
+  test::TempDir dir;
+  const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
+  io::Project project;
+  NullProgress progress;
+  auto scans = AppendScanFiles(project, {ab}, false, progress, CancelToken());
+  ASSERT_TRUE(scans.ok());
+  EXPECT_TRUE(scans->empty());
+  EXPECT_EQ(project.scans.size(), 2u);
+}
+
+TEST(AppendScanFiles, ErrorNamesTheFileAndLeavesTheProjectUnchanged) {
+  test::TempDir dir;
+  const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
+  io::Project project;
+  NullProgress progress;
+  ASSERT_TRUE(AppendScanFiles(project, {ab}, false, progress, CancelToken()).ok());
+  auto bad = AppendScanFiles(project, {ab, dir / "missing.ptx"}, true, progress, CancelToken());
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("missing.ptx"), std::string::npos) << bad.error().message;
+  EXPECT_EQ(project.scans.size(), 2u);
+}
+
+TEST(CreateProject, SavesTheProjectWithEveryScan) {
+  test::TempDir dir;
+  const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
+  NullProgress progress;
+  CreateProjectOptions options;
+  options.scan_files = {ab, ab};
+  auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
+  ASSERT_TRUE(project.ok()) << project.error().message;
+  auto loaded = io::LoadProject(dir / "p.scanreg.json");
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  ASSERT_EQ(loaded->scans.size(), 4u);
+  EXPECT_EQ(loaded->scans[3].name, "ab_2_2");
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline

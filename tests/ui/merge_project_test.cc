@@ -1,0 +1,446 @@
+// Drives the real main window under Xvfb for the merge panel, the project menus and the 3D view:
+// merge the registered demo project on the worker and export the mesh (re-read with VTK's readers),
+// cancel a merge, recent projects, new project / add scans, per-scan visibility, level of detail,
+// remembered options and `scanreg --screenshots`. A small street (4 stations, 1000 x 250) is
+// simulated and registered once; the tests open the saved registration.
+#include <QCheckBox>
+#include <QDir>
+#include <QDockWidget>
+#include <QElapsedTimer>
+#include <QMenu>
+#include <QMessageBox>
+#include <QSettings>
+#include <QSignalSpy>
+#include <QSurfaceFormat>
+#include <QTemporaryDir>
+#include <QTimer>
+#include <QVTKOpenGLNativeWidget.h>
+#include <QtTest/QtTest>
+#include <vtkActor.h>
+#include <vtkOBJReader.h>
+#include <vtkPLYReader.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkSTLReader.h>
+#include <vtkPointData.h>
+
+#include <cmath>
+
+#include "core/io/project.h"
+#include "core/pipeline/create_project.h"
+#include "core/report/report.h"
+#include "ui/app_settings.h"
+#include "ui/job_runner.h"
+#include "ui/main_window.h"
+#include "ui/merge_panel.h"
+#include "ui/project_panels.h"
+#include "ui/scan_scene.h"
+#include "ui/screenshot_tour.h"
+
+using scanreg::ui::JobRunner;
+using scanreg::ui::MainWindow;
+
+namespace {
+
+// Waits for the running job; returns true when it succeeded.
+bool WaitForJob(MainWindow& window, int timeout_ms, bool* cancelled = nullptr) {
+  QSignalSpy ok(window.jobs(), &JobRunner::Succeeded);
+  QSignalSpy failed(window.jobs(), &JobRunner::Failed);
+  QElapsedTimer timer;
+  timer.start();
+  while (ok.isEmpty() && failed.isEmpty() && timer.elapsed() < timeout_ms) QTest::qWait(50);
+  if (!failed.isEmpty() && cancelled) *cancelled = failed.first().at(2).toBool();
+  return !ok.isEmpty();
+}
+
+// A coarse, quick merge of the demo street: TSDF, 25 cm voxels, returns within 15 m.
+scanreg::merge::MergeOptions QuickMerge() {
+  scanreg::merge::MergeOptions options;
+  options.method = scanreg::merge::MergeMethod::kTsdf;
+  options.voxel_m = 0.25;
+  options.max_range_m = 15.0;
+  return options;
+}
+
+vtkSmartPointer<vtkPolyData> ReadMesh(const QString& path) {
+  const std::string file = path.toStdString();
+  vtkSmartPointer<vtkPolyDataAlgorithm> reader;
+  if (path.endsWith(".ply")) {
+    auto r = vtkSmartPointer<vtkPLYReader>::New();
+    r->SetFileName(file.c_str());
+    reader = r;
+  } else if (path.endsWith(".stl")) {
+    auto r = vtkSmartPointer<vtkSTLReader>::New();
+    r->SetFileName(file.c_str());
+    r->MergingOff();
+    reader = r;
+  } else {
+    auto r = vtkSmartPointer<vtkOBJReader>::New();
+    r->SetFileName(file.c_str());
+    reader = r;
+  }
+  reader->Update();
+  return reader->GetOutput();
+}
+
+// Standard deviation of the grey level, and the fraction of pixels of the most common colour.
+std::pair<double, double> ImageSpread(const QImage& image) {
+  QHash<QRgb, int> counts;
+  double sum = 0, sum2 = 0;
+  const int n = image.width() * image.height();
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      const QRgb c = image.pixel(x, y);
+      const double g = qGray(c);
+      sum += g, sum2 += g * g;
+      ++counts[c];
+    }
+  }
+  int most = 0;
+  for (int c : counts) most = std::max(most, c);
+  const double mean = sum / n;
+  return {std::sqrt(std::max(0.0, sum2 / n - mean * mean)), double(most) / n};
+}
+
+QStringList FilesIn(const QString& dir) { return QDir(dir).entryList(QDir::Files, QDir::Name); }
+
+// Rows of the scan list that hold registered scans (those drawn in the 3D view).
+std::vector<int> RegisteredRows(const MainWindow& window) {
+  std::vector<int> rows;
+  for (std::size_t i = 0; i < window.project().scans.size(); ++i)
+    if (window.project().scans[i].registered) rows.push_back(static_cast<int>(i));
+  return rows;
+}
+
+QString NameOf(const MainWindow& window, int row) {
+  return QString::fromStdString(window.project().scans[row].name);
+}
+
+}  // namespace
+
+class MergeProjectTest : public QObject {
+  Q_OBJECT
+
+ private slots:
+  void initTestCase() {
+    QVERIFY(demo_.isValid());
+    scanreg::SimulatedProjectOptions options;
+    options.stations = 4;
+    options.scanner.cols = 1000;
+    options.scanner.rows = 250;
+    scanreg::NullProgress progress;
+    const auto simulated = scanreg::pipeline::WriteSimulatedProject(options, demo_.filePath("demo").toStdString(),
+                                                                    progress, scanreg::CancelToken());
+    QVERIFY(simulated.ok());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(QString::fromStdString(simulated->file.string())));
+    QVERIFY(WaitForJob(window, 600000));
+    QVERIFY(window.RegisterProject());
+    QVERIFY(WaitForJob(window, 600000));
+    registered_ = demo_.filePath("demo/registered.scanreg.json");
+    QVERIFY(window.SaveProject(registered_));
+    int n = 0;
+    for (const auto& s : window.project().scans) n += s.registered;
+    QVERIFY2(n >= 3, qPrintable(QString("%1 of 4 scans registered").arg(n)));
+  }
+
+  void init() { QSettings().clear(); }  // each test starts from empty settings
+
+  void MergePanelStartsFromMergeOptionsDefaults() {
+    MainWindow window;
+    const scanreg::merge::MergeOptions defaults, shown = window.mergePanel()->Options();
+    QCOMPARE(int(shown.method), int(defaults.method));
+    QCOMPARE(shown.voxel_m, defaults.voxel_m);
+    QCOMPARE(shown.smooth_iterations, defaults.smooth_iterations);
+    QCOMPARE(shown.max_range_m, defaults.max_range_m);
+    QCOMPARE(shown.remove_small_pieces, defaults.remove_small_pieces);
+  }
+
+  void MergeThenExportPlyObjStlAndReadBack() {
+    MainWindow window;
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QVERIFY(!window.mergePanel()->Run());  // no project: a dialog names the next step
+    auto* box = window.findChild<QMessageBox*>("ErrorDialog");
+    QVERIFY(box != nullptr);
+    QVERIFY2(box->text().contains("Open a project"), qPrintable(box->text()));
+    box->close();
+
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    window.mergePanel()->SetOptions(QuickMerge());
+    QVERIFY(window.mergePanel()->Run());
+    QVERIFY(WaitForJob(window, 300000));
+    const scanreg::merge::Mesh* mesh = window.mergePanel()->mesh();
+    QVERIFY(mesh != nullptr);
+    const auto triangles = static_cast<vtkIdType>(mesh->triangles.size());
+    QVERIFY2(triangles > 1000, qPrintable(QString("%1 triangles").arg(triangles)));
+
+    // The preview: the same triangles, with normals, in the 3D view.
+    vtkActor* actor = window.scene()->MeshActor();
+    QVERIFY(actor != nullptr);
+    auto* poly = vtkPolyData::SafeDownCast(actor->GetMapper()->GetInput());
+    QCOMPARE(poly->GetNumberOfPolys(), triangles);
+    QVERIFY(poly->GetPointData()->GetNormals() != nullptr);
+    // Every vertex lies within the merge's range (15 m) plus a voxel of a registered scanner.
+    double worst = 0;
+    for (const Eigen::Vector3f& v : mesh->vertices) {
+      double nearest = 1e9;
+      for (const auto& s : window.project().scans)
+        if (s.registered) nearest = std::min(nearest, (mesh->origin + v.cast<double>() - s.world_from_scan.translation()).norm());
+      worst = std::max(worst, nearest);
+    }
+    QVERIFY2(worst < 15.0 + 0.5, qPrintable(QString("a vertex %1 m from every scanner").arg(worst)));
+
+    // Scans / mesh toggles.
+    const QString name = NameOf(window, RegisteredRows(window).front());
+    QVERIFY(window.scene()->CloudActor(name) != nullptr);
+    auto* show_scans = window.mergePanel()->findChild<QCheckBox*>("ShowScans");
+    show_scans->setChecked(false);
+    QVERIFY(!window.scene()->CloudActor(name)->GetVisibility());
+    QVERIFY(actor->GetVisibility());
+    show_scans->setChecked(true);
+    QVERIFY(window.scene()->CloudActor(name)->GetVisibility());
+
+    QTemporaryDir out;
+    for (const QString name : {"mesh.ply", "mesh.obj", "mesh.stl"}) {
+      const QString path = out.filePath(name);
+      QVERIFY(window.mergePanel()->ExportMesh(path));
+      QVERIFY(WaitForJob(window, 120000));
+      const vtkSmartPointer<vtkPolyData> read = ReadMesh(path);
+      QCOMPARE(read->GetNumberOfPolys(), triangles);
+    }
+    QCOMPARE(FilesIn(out.path()), QStringList({"mesh.obj", "mesh.ply", "mesh.stl"}));  // no temporary left
+    QVERIFY(!window.dirty());  // merging does not change the project
+  }
+
+  void CancelledMergeLeavesNoMeshNoFileAndTheProjectUnchanged() {
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    const QStringList files_before = FilesIn(QFileInfo(registered_).path());
+    std::vector<Eigen::Matrix4d> poses;
+    for (const auto& s : window.project().scans) poses.push_back(s.world_from_scan.matrix());
+    window.mergePanel()->SetOptions(QuickMerge());
+    QVERIFY(window.mergePanel()->Run());
+    window.jobs()->Cancel();
+    bool cancelled = false;
+    QVERIFY(!WaitForJob(window, 300000, &cancelled));
+    QVERIFY(cancelled);
+    QVERIFY(window.mergePanel()->mesh() == nullptr);
+    QVERIFY(window.scene()->MeshActor() == nullptr);
+    QVERIFY(!window.mergePanel()->ExportMesh(QDir::temp().filePath("never.ply")));
+    QVERIFY(!QFile::exists(QDir::temp().filePath("never.ply")));
+    QCOMPARE(FilesIn(QFileInfo(registered_).path()), files_before);
+    QVERIFY(!window.dirty());
+    for (std::size_t i = 0; i < poses.size(); ++i)
+      QVERIFY(window.project().scans[i].world_from_scan.matrix() == poses[i]);
+  }
+
+  void MergeOptionsAndWindowLayoutAreRemembered() {
+    scanreg::merge::MergeOptions chosen = QuickMerge();
+    chosen.smooth_iterations = 2;
+    chosen.remove_small_pieces = false;
+    QSize size;
+    {
+      MainWindow window;
+      window.show();
+      QVERIFY(QTest::qWaitForWindowExposed(&window));
+      window.resize(1320, 930);
+      size = window.size();  // at least the docks' minimum sizes
+      window.mergePanel()->SetOptions(chosen);
+      QVERIFY(!window.mergePanel()->Run());  // nothing to merge, but the choice is kept
+      window.findChild<QDockWidget*>("LogDock")->hide();
+      QTest::qWait(100);
+      QVERIFY(window.close());
+    }
+    MainWindow again;
+    const scanreg::merge::MergeOptions shown = again.mergePanel()->Options();
+    QCOMPARE(int(shown.method), int(chosen.method));
+    QCOMPARE(shown.voxel_m, chosen.voxel_m);
+    QCOMPARE(shown.max_range_m, chosen.max_range_m);
+    QCOMPARE(shown.smooth_iterations, 2);
+    QCOMPARE(shown.remove_small_pieces, false);
+    QCOMPARE(again.size(), size);
+    QVERIFY(again.findChild<QDockWidget*>("LogDock")->isHidden());
+  }
+
+  void RecentProjectsHoldTheReopenedProjectAndDropMissingOnes() {
+    MainWindow window;
+    window.show();
+    scanreg::ui::AddRecentProject(demo_.filePath("gone.scanreg.json"));  // no such file
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    const QString absolute = QFileInfo(registered_).absoluteFilePath();
+    QStringList recent = scanreg::ui::RecentProjects();
+    QCOMPARE(recent.first(), absolute);
+    QCOMPARE(recent.count(absolute), 1);
+    QCOMPARE(recent.size(), 2);
+
+    auto* menu = window.findChild<QMenu*>("RecentMenu");
+    QVERIFY(menu != nullptr);
+    emit menu->aboutToShow();
+    QCOMPARE(menu->actions().size(), 1);  // the missing project is gone
+    QVERIFY(menu->actions().first()->text().startsWith("registered.scanreg.json"));
+    QCOMPARE(scanreg::ui::RecentProjects(), QStringList({absolute}));
+
+    for (int i = 0; i < scanreg::ui::kMaxRecentProjects + 3; ++i)
+      scanreg::ui::AddRecentProject(demo_.filePath(QString("p%1.scanreg.json").arg(i)));
+    QCOMPARE(scanreg::ui::RecentProjects().size(), scanreg::ui::kMaxRecentProjects);
+  }
+
+  void NewProjectAndAddScansReadTheFilesOnTheWorker() {
+    MainWindow window;
+    window.show();
+    QTemporaryDir dir;
+    const QString demo = QFileInfo(registered_).path();
+    const QString path = dir.filePath("street.scanreg.json");
+    QVERIFY(window.NewProject({demo + "/s01.ptx", demo + "/s02.ptx"}, path));
+    QVERIFY(WaitForJob(window, 120000));
+    QCOMPARE(static_cast<int>(window.project().scans.size()), 2);
+    QCOMPARE(static_cast<int>(window.scans().size()), 2);
+    QVERIFY(QFile::exists(path));
+    QVERIFY(!window.dirty());
+
+    QVERIFY(window.AddScans({demo + "/s03.ptx", demo + "/s01.ptx"}));
+    QVERIFY(WaitForJob(window, 120000));
+    QStringList names;
+    for (const auto& s : window.project().scans) names << QString::fromStdString(s.name);
+    QCOMPARE(names, QStringList({"s01", "s02", "s03", "s01_2"}));
+    QCOMPARE(QString::fromStdString(window.scans()[3].name), QString("s01_2"));
+    QCOMPARE(window.scans()[3].CountValid(), window.scans()[0].CountValid());
+    QCOMPARE(window.scanList()->rowCount(), 4);
+    QVERIFY(window.dirty());
+
+    // A bad file: a dialog naming it; the project keeps its four scans.
+    const QString bad = dir.filePath("bad.ptx");
+    QFile f(bad);
+    QVERIFY(f.open(QIODevice::WriteOnly));
+    f.write("not a ptx\n");
+    f.close();
+    QVERIFY(window.AddScans({bad}));
+    QVERIFY(!WaitForJob(window, 120000));
+    auto* box = window.findChild<QMessageBox*>("ErrorDialog");
+    QVERIFY(box != nullptr);
+    QVERIFY2(box->text().contains("bad.ptx"), qPrintable(box->text()));
+    QCOMPARE(static_cast<int>(window.project().scans.size()), 4);
+
+    // Unsaved changes: Cancel keeps them, Discard lets the next action go on.
+    for (const auto& [button, expected] : {std::make_pair(QMessageBox::Cancel, false),
+                                           std::make_pair(QMessageBox::Discard, true)}) {
+      QTimer::singleShot(200, &window, [&window, button = button] {
+        auto* prompt = window.findChild<QMessageBox*>("UnsavedChangesDialog");
+        if (prompt) prompt->button(button)->click();
+      });
+      QCOMPARE(window.MaybeSaveChanges(), expected);
+    }
+  }
+
+  void UncheckingAScanHidesItsActor() {
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    const std::vector<int> rows = RegisteredRows(window);
+    QVERIFY(rows.size() >= 2);
+    const QString a = NameOf(window, rows[0]), b = NameOf(window, rows[1]);
+    QTableWidgetItem* item = window.scanList()->item(rows[0], 0);
+    QCOMPARE(item->text(), a);
+    QCOMPARE(item->checkState(), Qt::Checked);
+    vtkActor* before = window.scene()->CloudActor(a);
+    QVERIFY(before != nullptr && before->GetVisibility());
+    item->setCheckState(Qt::Unchecked);
+    QVERIFY(!window.scene()->CloudActor(a)->GetVisibility());
+    QVERIFY(window.scene()->CloudActor(b)->GetVisibility());
+    // Rebuilt actors (colour by reflectance) keep the choice, and so does the list.
+    window.findChild<QAction*>("ColourByReflectance")->setChecked(true);
+    QVERIFY(window.scene()->CloudActor(a) != before);
+    QVERIFY(!window.scene()->CloudActor(a)->GetVisibility());
+    QCOMPARE(window.scanList()->item(rows[0], 0)->checkState(), Qt::Unchecked);
+    window.scanList()->item(rows[0], 0)->setCheckState(Qt::Checked);
+    QVERIFY(window.scene()->CloudActor(a)->GetVisibility());
+  }
+
+  void DecimatedByDefaultFullResolutionOnDemand() {
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    std::size_t valid = 0;
+    for (std::size_t i = 0; i < window.scans().size(); ++i)
+      if (window.project().scans[i].registered) valid += window.scans()[i].CountValid();
+    QCOMPARE(window.scene()->decimatedPoints(), scanreg::ui::ScanScene::kDecimatedPoints);
+    // A budget of a fifth of the points stands for a project of millions.
+    const std::size_t budget = valid / 5;
+    window.scene()->SetDecimatedPoints(budget);
+    const std::size_t drawn = window.scene()->DrawnPoints();
+    QVERIFY2(drawn <= budget && drawn > budget * 8 / 10, qPrintable(QString("%1 drawn of %2").arg(drawn).arg(valid)));
+    window.findChild<QAction*>("FullResolution")->setChecked(true);
+    QCOMPARE(window.scene()->DrawnPoints(), valid);
+    window.findChild<QAction*>("FullResolution")->setChecked(false);
+    QCOMPARE(window.scene()->DrawnPoints(), drawn);
+  }
+
+  void ExportReportWritesThePageOnTheWorker() {
+    MainWindow window;
+    window.show();
+    QVERIFY(!window.ExportReport(demo_.filePath("no-project-report")));  // nothing to report
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    QTemporaryDir out;
+    QVERIFY(window.ExportReport(out.filePath("report")));
+    QVERIFY(WaitForJob(window, 120000));
+    QFile index(out.filePath("report/index.html"));
+    QVERIFY(index.open(QIODevice::ReadOnly));
+    const QString html = QString::fromUtf8(index.readAll());
+    for (const auto& s : window.project().scans) QVERIFY(html.contains(QString::fromStdString(s.name)));
+    QVERIFY(QFileInfo(out.filePath("report/") + scanreg::report::kNetworkPng).size() > 1000);
+    QVERIFY(!QFile::exists(demo_.filePath("no-project-report")));
+  }
+
+  void ScreenshotsAreWrittenAndNotBlank() {
+    MainWindow window;
+    window.resize(1400, 900);
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTemporaryDir out;
+    scanreg::ui::ScreenshotTour tour(&window, out.path(), QuickMerge());
+    QSignalSpy finished(&tour, &scanreg::ui::ScreenshotTour::Finished);
+    tour.Start(registered_);
+    QVERIFY(finished.wait(600000));
+    QVERIFY2(finished.first().at(0).toBool(), qPrintable(finished.first().at(1).toString()));
+    const auto views = scanreg::ui::ScreenshotViews();
+    QCOMPARE(FilesIn(out.path()).size(), static_cast<int>(views.size()));
+    for (const auto& view : views) {
+      const QImage image(out.filePath(view.file));
+      QVERIFY2(!image.isNull(), qPrintable(view.file));
+      QVERIFY2(image.width() >= 120 && image.height() >= 100, qPrintable(view.file));
+      const auto [spread, most] = ImageSpread(image);
+      QVERIFY2(spread > 8.0 && most < 0.99,
+               qPrintable(QString("%1: grey spread %2, most common colour %3").arg(view.file).arg(spread).arg(most)));
+    }
+  }
+
+ private:
+  QTemporaryDir demo_;
+  QString registered_;
+};
+
+int main(int argc, char** argv) {
+  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QApplication app(argc, argv);
+  // Settings of their own, in a temporary folder: the tests neither read nor change the user's.
+  QTemporaryDir settings;
+  QSettings::setDefaultFormat(QSettings::IniFormat);
+  QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, settings.path());
+  QApplication::setOrganizationName("scanreg-test");
+  QApplication::setApplicationName("merge-project-test");
+  MergeProjectTest test;
+  return QTest::qExec(&test, argc, argv);
+}
+
+#include "merge_project_test.moc"

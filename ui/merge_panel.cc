@@ -1,0 +1,252 @@
+#include "ui/merge_panel.h"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QSettings>
+#include <QSpinBox>
+#include <QVBoxLayout>
+
+#include "core/pipeline/merge_scans.h"
+#include "ui/app_settings.h"
+#include "ui/job_runner.h"
+#include "ui/main_window.h"
+#include "ui/scan_scene.h"
+
+namespace scanreg::ui {
+namespace {
+
+// Job results, by value through the JobRunner.
+struct MergedMesh {
+  std::shared_ptr<const merge::Mesh> mesh;
+  std::size_t scans = 0;
+  double seconds = 0.0;
+  merge::MergeMethod method = merge::MergeMethod::kTsdf;
+  double voxel_m = 0.0;
+};
+
+struct ExportedMesh {
+  QString path;
+  std::size_t triangles = 0;
+};
+
+const QString kMergeTitle = QObject::tr("Merging the registered scans");
+const QString kExportTitle = QObject::tr("Exporting the mesh");
+
+}  // namespace
+
+MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), window_(window), scene_(scene) {
+  setObjectName("MergePanel");
+  method_ = new QComboBox(this);
+  method_->setObjectName("MergeMethod");
+  method_->addItem(tr("Maximum likelihood (Sagawa et al.)"), int(merge::MergeMethod::kMaximumLikelihood));
+  method_->addItem(tr("TSDF (Curless–Levoy, faster)"), int(merge::MergeMethod::kTsdf));
+  voxel_mm_ = new QDoubleSpinBox(this);
+  voxel_mm_->setObjectName("MergeVoxel");
+  voxel_mm_->setRange(1.0, 2000.0);
+  voxel_mm_->setDecimals(1);
+  voxel_mm_->setSuffix(tr(" mm"));
+  voxel_mm_->setToolTip(tr("Edge of a voxel of the distance field: smaller is finer and slower."));
+  smooth_ = new QSpinBox(this);
+  smooth_->setObjectName("MergeSmoothing");
+  smooth_->setRange(0, 20);
+  smooth_->setSuffix(tr(" passes"));
+  smooth_->setToolTip(tr("Passes of a 3×3×3 mean filter over the distance field (0: none)."));
+  max_range_m_ = new QDoubleSpinBox(this);
+  max_range_m_->setObjectName("MergeMaxRange");
+  max_range_m_->setRange(0.0, 10000.0);
+  max_range_m_->setDecimals(1);
+  max_range_m_->setSuffix(tr(" m"));
+  max_range_m_->setSpecialValueText(tr("all returns"));
+  max_range_m_->setToolTip(tr("Returns farther from their scanner are left out (sparse, noisy far returns)."));
+  keep_pieces_ = new QCheckBox(tr("Keep small disconnected pieces"), this);
+  keep_pieces_->setObjectName("MergeKeepPieces");
+
+  auto* form = new QFormLayout;
+  form->addRow(tr("Method"), method_);
+  form->addRow(tr("Voxel"), voxel_mm_);
+  form->addRow(tr("Smoothing"), smooth_);
+  form->addRow(tr("Max range"), max_range_m_);
+  form->addRow(QString(), keep_pieces_);
+
+  run_ = new QPushButton(tr("Merge registered scans"), this);
+  run_->setObjectName("MergeRun");
+  export_ = new QPushButton(tr("Export mesh…"), this);
+  export_->setObjectName("MergeExport");
+  auto* buttons = new QHBoxLayout;
+  buttons->addWidget(run_);
+  buttons->addWidget(export_);
+
+  show_scans_ = new QCheckBox(tr("Scans"), this);
+  show_scans_->setObjectName("ShowScans");
+  show_scans_->setChecked(scene_->showScans());
+  show_mesh_ = new QCheckBox(tr("Mesh"), this);
+  show_mesh_->setObjectName("ShowMesh");
+  show_mesh_->setChecked(scene_->showMesh());
+  auto* show = new QHBoxLayout;
+  show->addWidget(new QLabel(tr("Show in 3D view:"), this));
+  show->addWidget(show_scans_);
+  show->addWidget(show_mesh_);
+  show->addStretch();
+
+  summary_ = new QLabel(tr("No mesh yet: register the scans, then merge."), this);
+  summary_->setObjectName("MergeSummary");
+  summary_->setWordWrap(true);
+
+  auto* layout = new QVBoxLayout(this);
+  layout->addLayout(form);
+  layout->addLayout(buttons);
+  layout->addLayout(show);
+  layout->addWidget(summary_);
+  layout->addStretch();
+
+  // Defaults from MergeOptions, then what the user chose last time.
+  const merge::MergeOptions defaults;
+  QSettings settings;
+  merge::MergeOptions options = defaults;
+  options.method = static_cast<merge::MergeMethod>(settings.value("merge/method", int(defaults.method)).toInt());
+  options.voxel_m = settings.value("merge/voxel_m", defaults.voxel_m).toDouble();
+  options.smooth_iterations = settings.value("merge/smooth_iterations", defaults.smooth_iterations).toInt();
+  options.max_range_m = settings.value("merge/max_range_m", defaults.max_range_m).toDouble();
+  options.remove_small_pieces = settings.value("merge/remove_small_pieces", defaults.remove_small_pieces).toBool();
+  SetOptions(options.Validate() ? options : defaults);
+
+  connect(run_, &QPushButton::clicked, this, &MergePanel::Run);
+  connect(export_, &QPushButton::clicked, this, &MergePanel::ChooseExportFile);
+  connect(show_scans_, &QCheckBox::toggled, scene_, &ScanScene::SetShowScans);
+  connect(show_mesh_, &QCheckBox::toggled, scene_, &ScanScene::SetShowMesh);
+  connect(window_->jobs(), &JobRunner::Succeeded, this, &MergePanel::OnJobSucceeded);
+  connect(window_->jobs(), &JobRunner::Started, this, &MergePanel::UpdateButtons);
+  connect(window_->jobs(), &JobRunner::Failed, this, &MergePanel::UpdateButtons);
+  connect(window_, &MainWindow::PosesChanged, this, [this] {
+    if (!mesh_) return;
+    ClearMesh();
+    summary_->setText(tr("The registration changed: merge again for a mesh that matches it."));
+  });
+  UpdateButtons();
+}
+
+merge::MergeOptions MergePanel::Options() const {
+  merge::MergeOptions options;
+  options.method = static_cast<merge::MergeMethod>(method_->currentData().toInt());
+  options.voxel_m = voxel_mm_->value() / 1000.0;
+  options.smooth_iterations = smooth_->value();
+  options.max_range_m = max_range_m_->value();
+  options.remove_small_pieces = !keep_pieces_->isChecked();
+  return options;
+}
+
+void MergePanel::SetOptions(const merge::MergeOptions& options) {
+  method_->setCurrentIndex(method_->findData(int(options.method)));
+  voxel_mm_->setValue(options.voxel_m * 1000.0);
+  smooth_->setValue(options.smooth_iterations);
+  max_range_m_->setValue(options.max_range_m);
+  keep_pieces_->setChecked(!options.remove_small_pieces);
+}
+
+void MergePanel::SaveOptions() const {
+  const merge::MergeOptions options = Options();
+  QSettings settings;
+  settings.setValue("merge/method", int(options.method));
+  settings.setValue("merge/voxel_m", options.voxel_m);
+  settings.setValue("merge/smooth_iterations", options.smooth_iterations);
+  settings.setValue("merge/max_range_m", options.max_range_m);
+  settings.setValue("merge/remove_small_pieces", options.remove_small_pieces);
+}
+
+bool MergePanel::Run() {
+  if (window_->jobs()->busy()) return false;
+  const merge::MergeOptions options = Options();
+  if (Status s = options.Validate(); !s) {
+    ShowError(tr("Cannot merge"), QString::fromStdString(s.error().message) + tr("\nChange the option and merge again."));
+    return false;
+  }
+  SaveOptions();
+  std::vector<Scan> scans;  // the job's own copy of the registered scans
+  for (std::size_t i = 0; i < window_->scans().size() && i < window_->project().scans.size(); ++i)
+    if (window_->project().scans[i].registered) scans.push_back(window_->scans()[i]);
+  if (scans.empty()) {
+    ShowError(tr("Nothing to merge"),
+              window_->project().scans.empty()
+                  ? tr("No project is open. Open a project (File → Open project…), register it, then merge.")
+                  : tr("No scan is registered yet. Register the project first (Registration → Register all "
+                       "scans, Ctrl+R), then merge."));
+    return false;
+  }
+  return window_->jobs()->Start(kMergeTitle, [scans = std::move(scans), options](ProgressSink& progress,
+                                                                                const CancelToken& cancel) {
+    Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
+    if (!r) return Expected<std::any>(r.error());
+    MergedMesh merged{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
+                      options.voxel_m};
+    return Expected<std::any>(std::any(std::move(merged)));
+  });
+}
+
+bool MergePanel::ExportMesh(const QString& path) {
+  if (!mesh_ || window_->jobs()->busy()) return false;
+  return window_->jobs()->Start(kExportTitle, [mesh = mesh_, path](ProgressSink& progress, const CancelToken&) {
+    progress.Report(0.0, "Writing " + path.toStdString());
+    if (Status s = pipeline::WriteMesh(path.toStdString(), *mesh); !s) return Expected<std::any>(s.error());
+    return Expected<std::any>(std::any(ExportedMesh{path, mesh->triangles.size()}));
+  });
+}
+
+void MergePanel::ChooseExportFile() {
+  if (!mesh_) return;
+  QString filter;
+  QString path = QFileDialog::getSaveFileName(this, tr("Export mesh"), LastDir() + "/merged.ply",
+                                              tr("PLY mesh (*.ply);;Wavefront OBJ (*.obj);;STL (*.stl)"), &filter);
+  if (path.isEmpty()) return;
+  const QString suffix = QFileInfo(path).suffix().toLower();
+  if (suffix != "ply" && suffix != "obj" && suffix != "stl") {
+    path += filter.contains("*.obj") ? ".obj" : filter.contains("*.stl") ? ".stl" : ".ply";
+  }
+  RememberDir(path);
+  ExportMesh(path);
+}
+
+void MergePanel::OnJobSucceeded(const QString&, const std::any& result) {
+  if (const auto* merged = std::any_cast<MergedMesh>(&result)) {
+    mesh_ = merged->mesh;
+    scene_->SetMesh(mesh_);
+    summary_->setText(tr("%L1 triangles, %L2 vertices from %3 scans (%4, %5 mm voxels) in %6 s.")
+                          .arg(mesh_->triangles.size())
+                          .arg(mesh_->vertices.size())
+                          .arg(merged->scans)
+                          .arg(merged->method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
+                          .arg(merged->voxel_m * 1000.0, 0, 'f', 1)
+                          .arg(merged->seconds, 0, 'f', 1));
+  } else if (const auto* exported = std::any_cast<ExportedMesh>(&result)) {
+    summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported->triangles).arg(exported->path));
+  }
+  UpdateButtons();
+}
+
+void MergePanel::ClearMesh() {
+  mesh_.reset();
+  scene_->SetMesh(nullptr);
+  UpdateButtons();
+}
+
+void MergePanel::UpdateButtons() {
+  const bool idle = !window_->jobs()->busy();
+  run_->setEnabled(idle);
+  export_->setEnabled(idle && mesh_ != nullptr);
+}
+
+void MergePanel::ShowError(const QString& title, const QString& message) {
+  auto* box = new QMessageBox(QMessageBox::Warning, title, message, QMessageBox::Ok, this);
+  box->setAttribute(Qt::WA_DeleteOnClose);
+  box->setObjectName("ErrorDialog");
+  box->open();  // window-modal, does not block the event loop
+}
+
+}  // namespace scanreg::ui

@@ -1,0 +1,66 @@
+// The merge dock (SPEC §4): the merge options (MergeOptions' defaults, then the user's last choice
+// from QSettings), Merge on the worker thread (progress and Cancel in the status bar), the mesh
+// previewed in the 3D view with scans / mesh toggles, and Export to PLY, OBJ or STL (also on the
+// worker). The mesh is dropped when the registration changes (it would no longer match).
+#pragma once
+
+#include <QWidget>
+#include <any>
+#include <memory>
+
+#include "core/merge/merge_options.h"
+#include "core/merge/mesh.h"
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QPushButton;
+class QSpinBox;
+
+namespace scanreg::ui {
+
+class MainWindow;
+class ScanScene;
+
+class MergePanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  MergePanel(MainWindow* window, ScanScene* scene);
+
+  merge::MergeOptions Options() const;
+  void SetOptions(const merge::MergeOptions& options);
+
+  // Starts the merge of the registered scans; false when a job runs or nothing can be merged
+  // (then a dialog names the next step). Completion: the window's jobs()->Succeeded / Failed.
+  bool Run();
+  // Writes the mesh (by extension: .ply, .obj, .stl) on the worker; false without a mesh.
+  bool ExportMesh(const QString& path);
+  // The last merged mesh, or null.
+  const merge::Mesh* mesh() const { return mesh_.get(); }
+
+ private:
+  void OnJobSucceeded(const QString& title, const std::any& result);
+  void ClearMesh();
+  void ChooseExportFile();
+  void SaveOptions() const;
+  void UpdateButtons();
+  void ShowError(const QString& title, const QString& message);
+
+  MainWindow* window_;
+  ScanScene* scene_;
+  std::shared_ptr<const merge::Mesh> mesh_;  // immutable once merged: the export job reads it too
+  QComboBox* method_ = nullptr;
+  QDoubleSpinBox* voxel_mm_ = nullptr;
+  QSpinBox* smooth_ = nullptr;
+  QDoubleSpinBox* max_range_m_ = nullptr;
+  QCheckBox* keep_pieces_ = nullptr;
+  QCheckBox* show_scans_ = nullptr;
+  QCheckBox* show_mesh_ = nullptr;
+  QPushButton* run_ = nullptr;
+  QPushButton* export_ = nullptr;
+  QLabel* summary_ = nullptr;
+};
+
+}  // namespace scanreg::ui
