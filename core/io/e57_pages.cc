@@ -43,18 +43,6 @@ __attribute__((target("sse4.2"))) std::uint32_t Crc32cSse42(const unsigned char*
 }
 #endif
 
-template <typename T>
-T LoadLe(const char* p) {
-  T v = 0;
-  for (std::size_t i = 0; i < sizeof(T); ++i) v |= T(static_cast<unsigned char>(p[i])) << (8 * i);
-  return v;
-}
-
-template <typename T>
-void StoreLe(char* p, T v) {
-  for (std::size_t i = 0; i < sizeof(T); ++i) p[i] = static_cast<char>((v >> (8 * i)) & 0xFF);
-}
-
 // Checks the checksum of one physical page; false when it does not match.
 bool PageChecksumOk(const char* page) {
   const std::uint32_t crc = Crc32c(page, kPageData);

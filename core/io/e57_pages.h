@@ -28,6 +28,19 @@ inline std::uint64_t PhysicalFromLogical(std::uint64_t logical) {
   return logical / kPageData * kPageSize + logical % kPageData;
 }
 
+// Little-endian integers, as every binary field of E57 is stored.
+template <typename T>
+T LoadLe(const char* p) {
+  T v = 0;
+  for (std::size_t i = 0; i < sizeof(T); ++i) v |= T(static_cast<unsigned char>(p[i])) << (8 * i);
+  return v;
+}
+
+template <typename T>
+void StoreLe(char* p, T v) {
+  for (std::size_t i = 0; i < sizeof(T); ++i) p[i] = static_cast<char>((v >> (8 * i)) & 0xFF);
+}
+
 struct FileHeader {
   std::uint32_t version_major = 1;
   std::uint32_t version_minor = 0;

@@ -16,16 +16,6 @@ constexpr double kFarAway = 1e4;           // metres; float keeps ~1 mm up to he
 
 enum class Role { kX, kY, kZ, kRange, kAzimuth, kElevation, kIntensity, kRow, kColumn, kInvalid, kReturn, kOther };
 
-std::uint64_t LoadU64(const char* p) {
-  std::uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v |= std::uint64_t(static_cast<unsigned char>(p[i])) << (8 * i);
-  return v;
-}
-
-std::uint16_t LoadU16(const char* p) {
-  return static_cast<std::uint16_t>(static_cast<unsigned char>(p[0]) | (static_cast<unsigned char>(p[1]) << 8));
-}
-
 struct FieldStream {
   const Field* field = nullptr;
   Role role = Role::kOther;
@@ -71,7 +61,7 @@ class PacketParser {
     while (bytes.size() - pos >= 4) {
       const char* p = bytes.data() + pos;
       const auto type = static_cast<std::uint8_t>(p[0]);
-      const std::size_t length = std::size_t(LoadU16(p + 2)) + 1;
+      const std::size_t length = std::size_t(LoadLe<std::uint16_t>(p + 2)) + 1;
       if (type != kDataPacket && type != kIndexPacket && type != kEmptyPacket) {
         return Bad(offset + pos, "unknown packet type " + std::to_string(type));
       }
@@ -93,7 +83,7 @@ class PacketParser {
  private:
   Status DataPacket(std::string_view packet, std::uint64_t at) {
     if (packet.size() < 6) return Bad(at, "a data packet shorter than its header");
-    const std::size_t count = LoadU16(packet.data() + 4);
+    const std::size_t count = LoadLe<std::uint16_t>(packet.data() + 4);
     if (count != streams_.size()) {
       return Bad(at, "a data packet with " + std::to_string(count) + " bytestreams, but the prototype has " +
                          std::to_string(streams_.size()) + " fields");
@@ -101,7 +91,7 @@ class PacketParser {
     std::size_t offset = 6 + 2 * count;
     if (offset > packet.size()) return Bad(at, "its bytestream lengths run past the packet");
     for (std::size_t k = 0; k < count; ++k) {
-      const std::size_t n = LoadU16(packet.data() + 6 + 2 * k);
+      const std::size_t n = LoadLe<std::uint16_t>(packet.data() + 6 + 2 * k);
       if (offset + n > packet.size()) return Bad(at, "bytestream " + std::to_string(k + 1) + " runs past the packet");
       streams_[k].bits.Append(packet.substr(offset, n));
       offset += n;
@@ -234,8 +224,8 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
   std::string header;
   if (Status s = file.Read(scan.points_offset, kSectionHeaderSize, "the points section of " + scan_label, &header); !s)
     return s.error();
-  const std::uint64_t section_length = LoadU64(header.data() + 8);
-  const std::uint64_t data_offset = LoadU64(header.data() + 16);
+  const std::uint64_t section_length = LoadLe<std::uint64_t>(header.data() + 8);
+  const std::uint64_t data_offset = LoadLe<std::uint64_t>(header.data() + 16);
   const std::uint64_t section_start = LogicalFromPhysical(scan.points_offset);
   if (static_cast<std::uint8_t>(header[0]) != kCompressedVectorSection || section_length < kSectionHeaderSize ||
       section_length > file.logical_length() - section_start) {

@@ -41,7 +41,9 @@ std::uint64_t PacketLength(std::size_t records, int row_bits, int col_bits) {
 }
 
 void PutLe(std::string& out, std::uint64_t v, int bytes) {
-  for (int i = 0; i < bytes; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+  char b[8];
+  e57::StoreLe<std::uint64_t>(b, v);
+  out.append(b, bytes);
 }
 
 void PutFloat(std::string& out, float v) {
