@@ -23,12 +23,6 @@ double Since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
-  for (std::size_t i = 0; i < scans.size(); ++i)
-    if (scans[i].name == name) return static_cast<int>(i);
-  return -1;
-}
-
 // The fine step's scale follows the overlap distance: poses are already close.
 RegisterOptions ScaledOptions(RegisterOptions o) {
   const double d = o.overlap_distance_m;
@@ -156,25 +150,9 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     }
   result.seconds_matching = Since(t_overlap);
 
-  std::optional<int> root;
-  if (options.root) {
-    root = IndexOf(scans, *options.root);
-    if (*root < 0) return MakeError(ErrorCode::kInvalidArgument, "root scan '" + *options.root + "' is not in the project");
-  }
-  std::vector<std::optional<int>> overrides(n);
-  for (int i = 0; i < n && i < static_cast<int>(parent_override.size()); ++i) {
-    if (!parent_override[i]) continue;
-    overrides[i] = IndexOf(scans, *parent_override[i]);
-    if (*overrides[i] < 0) {
-      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "': parent override '" +
-                                                        *parent_override[i] + "' is not in the project");
-    }
-  }
-  std::vector<std::pair<int, int>> excluded;
-  for (const auto& [p, c] : rejected) {
-    const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
-    if (pi >= 0 && ci >= 0) excluded.emplace_back(pi, ci);
-  }
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
+  if (!choices) return choices.error();
+  std::vector<std::pair<int, int>> excluded = choices->excluded;
   const int min_weight = std::max(1, static_cast<int>(std::lround(1000 * options.thresholds.min_overlap)));
 
   // Refine along the maximum-overlap tree; a failed link is excluded and the tree recomputed.
@@ -193,7 +171,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
   };
   ScanOrder order;
   for (int round = 0; round <= n * n; ++round) {
-    Expected<ScanOrder> o = ComputeScanOrder(result.confusion, root, overrides, excluded, min_weight);
+    Expected<ScanOrder> o = ComputeScanOrder(result.confusion, choices->root, choices->overrides, excluded, min_weight);
     if (!o) return o.error();
     order = *o;
     bool changed = false;

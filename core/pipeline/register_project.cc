@@ -49,6 +49,33 @@ std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int chil
   return out;
 }
 
+Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans,
+                                                   const std::vector<std::optional<std::string>>& parent_override,
+                                                   const std::vector<std::pair<std::string, std::string>>& rejected,
+                                                   const std::optional<std::string>& root) {
+  const int n = static_cast<int>(scans.size());
+  ScanOrderChoices out;
+  if (root) {
+    out.root = IndexOf(scans, *root);
+    if (*out.root < 0) return MakeError(ErrorCode::kInvalidArgument, "root scan '" + *root + "' is not in the project");
+  }
+  out.overrides.resize(n);
+  for (int i = 0; i < n && i < static_cast<int>(parent_override.size()); ++i) {
+    if (!parent_override[i]) continue;
+    const int p = IndexOf(scans, *parent_override[i]);
+    if (p < 0) {
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "': parent override '" +
+                                                        *parent_override[i] + "' is not in the project");
+    }
+    out.overrides[i] = p;
+  }
+  for (const auto& [p, c] : rejected) {
+    const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
+    if (pi >= 0 && ci >= 0) out.excluded.emplace_back(pi, ci);
+  }
+  return out;
+}
+
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                             const std::vector<std::optional<std::string>>& parent_override,
                                             const std::vector<std::pair<std::string, std::string>>& rejected,
@@ -95,26 +122,11 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
 
   // W §2 step 4 with failure handling: register along the tree; a failed link is excluded and the
   // tree recomputed, so the next-best edge takes its place.
-  std::optional<int> root;
-  if (options.root) {
-    root = IndexOf(scans, *options.root);
-    if (*root < 0) return MakeError(ErrorCode::kInvalidArgument, "root scan '" + *options.root + "' is not in the project");
-  }
-  std::vector<std::optional<int>> overrides(n);
-  for (int i = 0; i < n && i < static_cast<int>(parent_override.size()); ++i) {
-    if (!parent_override[i]) continue;
-    const int p = IndexOf(scans, *parent_override[i]);
-    if (p < 0) {
-      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "': parent override '" +
-                                                        *parent_override[i] + "' is not in the project");
-    }
-    overrides[i] = p;
-  }
-  std::vector<std::pair<int, int>> excluded;
-  for (const auto& [p, c] : rejected) {
-    const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
-    if (pi >= 0 && ci >= 0) excluded.emplace_back(pi, ci);
-  }
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
+  if (!choices) return choices.error();
+  const std::optional<int> root = choices->root;
+  const std::vector<std::optional<int>>& overrides = choices->overrides;
+  std::vector<std::pair<int, int>> excluded = choices->excluded;
   t0 = std::chrono::steady_clock::now();
   std::map<std::pair<int, int>, PairResult> done;
   auto link = [&](int parent, int child) -> PairResult& {
@@ -272,8 +284,6 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
     if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;
   }
   project.confusion = result.confusion;
-  project.confusion_scans.clear();
-  for (const io::ProjectScan& s : project.scans) project.confusion_scans.push_back(s.name);
   // Keep the user's accept / reject decisions on links that were recomputed.
   std::vector<io::LinkRecord> links = result.links;
   for (io::LinkRecord& l : links) {

@@ -48,6 +48,18 @@ struct ProjectRegistration {
 // the ratio test is asymmetric, so the union holds more true correspondences than either side.
 std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child);
 
+// The user's scan-order choices by scan index: root, parent overrides, rejected links (dropped
+// when they name a scan not in the list). Errors name an unknown root or parent override.
+struct ScanOrderChoices {
+  std::optional<int> root;
+  std::vector<std::optional<int>> overrides;      // one per scan
+  std::vector<std::pair<int, int>> excluded;      // (parent, child)
+};
+Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans,
+                                                   const std::vector<std::optional<std::string>>& parent_override,
+                                                   const std::vector<std::pair<std::string, std::string>>& rejected,
+                                                   const std::optional<std::string>& root);
+
 // scans: with their current world_from_scan (the root keeps its own); parent_override by scan
 // name (empty optional = automatic); rejected: (parent, child) links the user rejected.
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,

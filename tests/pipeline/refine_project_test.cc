@@ -113,7 +113,9 @@ TEST(RegisterFromCurrentPoses, StanfordBunnyPerturbedBackToBunConf) {
                 global ? " --global" : "", tree, extra, pos * 1e3, ang * kDeg, start_pos * 1e3, start_ang * kDeg);
     EXPECT_EQ(tree, 3);
     EXPECT_EQ(r->global_links.empty(), !global);
-    if (global) EXPECT_GT(extra, 0);
+    if (global) {
+      EXPECT_GT(extra, 0);
+    }
     EXPECT_LT(pos, 0.002);
     EXPECT_LT(ang, 1.0 / kDeg);
   }
