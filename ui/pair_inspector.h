@@ -1,10 +1,9 @@
 // Wires the panorama view and the pair panel to the main window: selecting a scan in the scan
 // list shows its panorama; clicking a confusion-matrix cell, double-clicking a link of the scan
-// network or the pair panel's Run registers
-// that pair on the worker and shows both panoramas with the inlier / outlier matches, the
-// evidence in the pair panel and both scans in the 3D view coloured by their distance to each
-// other. Jobs run on the window's JobRunner (progress and Cancel in the status bar); a request
-// made while another job runs starts when it ends.
+// network or the pair panel's Run registers that pair on the worker and shows both panoramas with
+// the inlier / outlier matches, the evidence in the pair panel and both scans in the 3D view
+// coloured by their distance to each other. Jobs run on the window's JobRunner (progress and
+// Cancel in the status bar); a request made while another job runs starts when it ends.
 #pragma once
 
 #include <QObject>
