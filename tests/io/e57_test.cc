@@ -402,6 +402,43 @@ TEST(E57, ReadsScaledIntegersAndInvalidState) {
   EXPECT_LE(max_rel_err, 3e-7);  // a few float ulps: the points stay float, ~1e9 here
 }
 
+TEST(E57, SkipsIndexAndEmptyPackets) {
+  TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const Scan scan = MakeRoomScan(30, 80, "room");
+  ASSERT_TRUE(WriteE57(dir / "a.e57", {scan}, progress, cancel).ok());
+  // Our writer puts the one section at logical byte 48 (header 32 bytes, then data packets) and
+  // the XML last. Put an index packet (16-byte header, one entry) and an empty packet before the
+  // data packets; the section and everything after it grow by 36 bytes.
+  std::string logical = LogicalBytes(ReadBytes(dir / "a.e57"));
+  std::string index(32, '\0');
+  index[0] = 0, index[2] = 31, index[4] = 1;  // type, length - 1, entryCount
+  const std::string empty = std::string("\x02\x00\x03\x00", 4);
+  logical.insert(48 + 32, index + empty);
+  std::uint64_t section_length = 0, xml_offset = 0;
+  std::memcpy(&section_length, &logical[48 + 8], 8);
+  std::memcpy(&xml_offset, &logical[24], 8);
+  section_length += 36;
+  xml_offset = e57::PhysicalFromLogical(e57::LogicalFromPhysical(xml_offset) + 36);
+  const std::uint64_t physical_length = (logical.size() + e57::kPageData - 1) / e57::kPageData * e57::kPageSize;
+  std::memcpy(&logical[48 + 8], &section_length, 8);
+  std::memcpy(&logical[24], &xml_offset, 8);
+  std::memcpy(&logical[16], &physical_length, 8);
+  WriteBytes(dir / "b.e57", PagedBytes(logical));
+  Expected<std::vector<Scan>> back = ReadE57(dir / "b.e57", {}, progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  EXPECT_EQ((*back)[0].valid, scan.valid);
+  EXPECT_EQ((*back)[0].points, scan.points);
+
+  logical[48 + 32] = 7;  // an unknown packet type
+  WriteBytes(dir / "c.e57", PagedBytes(logical));
+  Expected<std::vector<Scan>> bad = ReadE57(dir / "c.e57", {}, progress, cancel);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_TRUE(Has(bad.error().message, "packet at byte 32 of the points section: unknown packet type 7"))
+      << bad.error().message;
+}
+
 TEST(E57, MalformedFilesGiveClearErrors) {
   TempDir dir;
   const std::string good = SmallFile(dir);
