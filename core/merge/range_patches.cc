@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 namespace scanreg::merge {
 
@@ -65,8 +66,7 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
     return true;
   }
   const float nearest = tr < 0.5f ? (tc < 0.5f ? v00 : v01) : (tc < 0.5f ? v10 : v11);
-  if (nearest <= 0.0f) return false;
-  *surface_range = nearest;
+  *surface_range = nearest > 0.0f ? nearest : std::numeric_limits<float>::infinity();  // no return: seen through
   return true;
 }
 
