@@ -160,7 +160,8 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
        {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
-       {"global", false, false, "       global registration: pose graph over every link (all links loop-checked)"},
+       {"global", false, false, "       global registration: pose graph over every link, all links loop-checked (default)"},
+       {"no-global", false, false, "       no global registration: chain the pairwise links along the tree only"},
        {"json", false, false, "       print the result as JSON"}},
       &code);
   if (!args) return code;
@@ -194,7 +195,10 @@ int RunRegister(const std::vector<std::string>& argv) {
   if (!noise) return Fail(noise.error());
   options.range_sigma_m = *noise;
   if (auto root = args->Get("root")) options.root = *root;
-  if (args->Has("global")) options.global = options.verify_all_links = true;
+  if (args->Has("global") && args->Has("no-global")) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give --global or --no-global, not both"));
+  }
+  options.global = !args->Has("no-global");
 
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());

@@ -19,9 +19,8 @@ EmOptions PipelineEmOptions(const RegisterOptions& options, const Scan& child) {
   return o;
 }
 
-Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& child,
-                               const Eigen::Isometry3d& initial, const RegisterOptions& options,
-                               const CancelToken& cancel) {
+Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& initial,
+                               const RegisterOptions& options, const CancelToken& cancel) {
   NullProgress quiet;
   FineResult out;
   switch (options.fine) {
@@ -29,7 +28,8 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
       return MakeError(ErrorCode::kInvalidArgument,
                        "fine method 'keypoints' needs feature matches; use em, projective-icp or dense");
     case FineMethod::kDense: {
-      Expected<IcpResult> icp = DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
+      Expected<IcpResult> icp =
+          DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
       if (!icp) return icp.error();
       out.parent_from_child = icp->parent_from_child;
       out.iterations = icp->iterations;
@@ -40,8 +40,9 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
     case FineMethod::kProjectiveIcp: {
       const EmOptions em = PipelineEmOptions(options, *child.scan);
       Expected<EmResult> r = AlignEm(*parent.scan, *child.scan, initial, em, quiet, cancel);
-      if (!r) return MakeError(r.error().code, EmMethodName(em) + " of '" + child.scan->name + "' to '" +
-                                                   parent.scan->name + "': " + r.error().message);
+      if (!r)
+        return MakeError(r.error().code, EmMethodName(em) + " of '" + child.scan->name + "' to '" + parent.scan->name +
+                                             "': " + r.error().message);
       out.parent_from_child = r->parent_from_child;
       out.iterations = r->iterations;
       out.converged = r->converged;

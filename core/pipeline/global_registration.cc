@@ -31,13 +31,14 @@ Status RunGlobalRegistration(const std::vector<Scan>& scans, const CancelToken& 
   NullProgress quiet;
   Expected<PoseGraphResult> solved = OptimizePoseGraph(initial, graph, options, quiet, cancel);
   if (!solved) return solved.error();
-  for (std::size_t k = 0; k < scan_of.size(); ++k) result->scans[scan_of[k]].world_from_scan = solved->world_from_scan[k];
+  for (std::size_t k = 0; k < scan_of.size(); ++k)
+    result->scans[scan_of[k]].world_from_scan = solved->world_from_scan[k];
   result->global_links.clear();
   for (const PoseGraphLinkReport& r : solved->links) {
     const std::string& parent = scans[scan_of[r.parent]].name;
     const std::string& child = scans[scan_of[r.child]].name;
-    result->global_links.push_back({parent, child, r.translation_before_m, r.rotation_before_rad,
-                                    r.translation_after_m, r.rotation_after_rad, r.weight, r.down_weighted});
+    result->global_links.push_back({parent, child, r.translation_before_m, r.rotation_before_rad, r.translation_after_m,
+                                    r.rotation_after_rad, r.weight, r.down_weighted});
     if (r.down_weighted) LogWarning("global registration down-weighted link " + child + " -> " + parent);
   }
   return Status::Ok();

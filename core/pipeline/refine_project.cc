@@ -77,9 +77,10 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     link.status = io::LinkStatus::kOk;
     if (moved > 2 * options.overlap_distance_m) {
       link.status = io::LinkStatus::kFailed;
-      link.reason = Format("the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
-                           "distance %.1f mm): diverged; correct the start pose or raise --overlap-distance",
-                           1e3 * moved, 1e3 * options.overlap_distance_m);
+      link.reason = Format(
+          "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
+          "distance %.1f mm): diverged; correct the start pose or raise --overlap-distance",
+          1e3 * moved, 1e3 * options.overlap_distance_m);
     } else if (e.overlap < t.min_overlap) {
       link.status = io::LinkStatus::kFailed;
       link.reason = Format("overlap %.1f %% after refinement is below %.1f %%", 100 * e.overlap, 100 * t.min_overlap);
@@ -115,8 +116,9 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
                                                        const CancelToken& cancel) {
   if (Status s = raw_options.Validate(); !s) return s.error();
   if (raw_options.fine == FineMethod::kKeypoints) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     "--coarse none has no feature matches for --fine keypoints; use --fine em, projective-icp or dense");
+    return MakeError(
+        ErrorCode::kInvalidArgument,
+        "--coarse none has no feature matches for --fine keypoints; use --fine em, projective-icp or dense");
   }
   const RegisterOptions options = ScaledOptions(raw_options);
   const int n = static_cast<int>(scans.size());
@@ -132,7 +134,8 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     std::vector<Eigen::Vector3d> pts;
     for (std::size_t k = 0; k < scans[i].size(); ++k)
       if (scans[i].valid[k]) pts.push_back(scans[i].points[k].cast<double>());
-    if (pts.empty()) return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
+    if (pts.empty())
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
     prepared[i].scan = &scans[i];
     prepared[i].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
     index[i] = std::make_unique<PointIndex>(prepared[i].samples);

@@ -179,7 +179,8 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     for (int child : order.order) {
       const int parent = order.parent[child];
       if (parent < 0) continue;
-      if (!options.verify_all_links && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
+      const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
+      if (!check_all && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
       int best = -1, best_weight = options.min_check_matches - 1;
       for (int q : order.order) {
         if (q == child || q == parent || order.parent[q] == child) continue;

@@ -5,6 +5,7 @@
 //  (c) the same links plus one wrong extra link (1 m, 5 deg off) - the failure case,
 //  (d) the Stanford bunny, `--coarse none --fine em` from bun.conf poses perturbed by 3 deg / 3 mm.
 // Errors: scan positions and angles against the reference, relative to the root.
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,7 +13,6 @@
 #include <filesystem>
 #include <random>
 #include <string>
-#include <unistd.h>
 
 #include "core/geometry/transform.h"
 #include "core/io/ply.h"
@@ -86,7 +86,8 @@ void Street(Table& table, bool quick) {
       std::filesystem::temp_directory_path() / ("scanreg-bench-global-" + std::to_string(::getpid()));
   pipeline::RegisterOptions global_options = tree_options;
   global_options.global = global_options.verify_all_links = true;  // as `register --global`
-  Expected<pipeline::ProjectRegistration> tree = pipeline::RegisterScans(*scans, {}, {}, tree_options, progress, cancel);
+  Expected<pipeline::ProjectRegistration> tree =
+      pipeline::RegisterScans(*scans, {}, {}, tree_options, progress, cancel);
   Expected<pipeline::ProjectRegistration> global =
       pipeline::RegisterScans(*scans, {}, {}, global_options, progress, cancel);
   std::filesystem::remove_all(tree_options.feature_cache_dir);
@@ -134,7 +135,8 @@ void Street(Table& table, bool quick) {
   Eigen::Isometry3d off = Eigen::Isometry3d::Identity();
   off.linear() = Eigen::AngleAxisd(5.0 / kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   off.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
-  fake.parent_from_child = (*(*scans)[p].reference_world_from_scan).inverse() * *(*scans)[c].reference_world_from_scan * off;
+  fake.parent_from_child =
+      (*(*scans)[p].reference_world_from_scan).inverse() * *(*scans)[c].reference_world_from_scan * off;
   wrong.links.push_back(fake);
   Rechain(*scans, &wrong);
   pipeline::ProjectRegistration wrong_global = wrong;
@@ -142,7 +144,8 @@ void Street(Table& table, bool quick) {
   int down = 0;
   for (const auto& g : wrong_global.global_links) down += g.down_weighted;
   AddPair(table, "street + wrong link " + fake.parent + "-" + fake.child, WorstError(wrong, *scans),
-          WorstError(wrong_global, *scans), "1 m / 5 deg wrong extra link; down-weighted links: " + std::to_string(down));
+          WorstError(wrong_global, *scans),
+          "1 m / 5 deg wrong extra link; down-weighted links: " + std::to_string(down));
 }
 
 std::filesystem::path RealData() {
@@ -154,7 +157,8 @@ void Bunny(Table& table, bool quick) {
   const std::filesystem::path dir = RealData() / "stanford_bunny";
   Expected<std::vector<io::NamedPose>> poses = io::ReadBunConf(dir / "bun.conf");
   if (!poses) {
-    table.Add({kSection, "bunny --coarse none", 0.0, "", "skipped: " + poses.error().ToString() + " (set SCANREG_REALDATA)"});
+    table.Add(
+        {kSection, "bunny --coarse none", 0.0, "", "skipped: " + poses.error().ToString() + " (set SCANREG_REALDATA)"});
     return;
   }
   NullProgress progress;
@@ -189,8 +193,10 @@ void Bunny(Table& table, bool quick) {
     for (std::size_t i = 0; i < scans.size(); ++i) {
       Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
       if (scans[i].name != "bun000") {
-        move.linear() = Eigen::AngleAxisd(3.0 / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
-        move.translation() = centroid[i] - move.linear() * centroid[i] + 0.003 * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+        move.linear() =
+            Eigen::AngleAxisd(3.0 / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+        move.translation() =
+            centroid[i] - move.linear() * centroid[i] + 0.003 * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
       }
       scans[i].world_from_scan = move * *scans[i].reference_world_from_scan;
     }

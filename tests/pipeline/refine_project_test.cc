@@ -47,7 +47,8 @@ std::vector<Scan> PerturbedBunny(const std::filesystem::path& data, double deg, 
       c = p.world_from_scan * (c / n);
       Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
       if (!scans.empty()) {
-        move.linear() = Eigen::AngleAxisd(deg / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+        move.linear() =
+            Eigen::AngleAxisd(deg / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
         move.translation() = c - move.linear() * c + 1e-3 * mm * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
       }
       s->world_from_scan = move * p.world_from_scan;
@@ -62,8 +63,8 @@ RegisterOptions BunnyOptions(FineMethod fine, bool global) {
   o.from_current_poses = true;
   o.fine = fine;
   o.global = global;
-  o.range_sigma_m = 0.0005;      // Cyberware, ~0.5 mm
-  o.overlap_distance_m = 0.01;   // a few times the start error
+  o.range_sigma_m = 0.0005;     // Cyberware, ~0.5 mm
+  o.overlap_distance_m = 0.01;  // a few times the start error
   o.thresholds.max_rms_m = 0.002;
   o.thresholds.weak_rms_m = 0.001;
   o.root = "bun000";
@@ -74,8 +75,8 @@ RegisterOptions BunnyOptions(FineMethod fine, bool global) {
 std::pair<double, double> WorstError(const std::vector<Scan>& scans, const std::vector<Eigen::Isometry3d>& world) {
   double pos = 0, ang = 0;
   for (std::size_t i = 1; i < scans.size(); ++i) {
-    const PoseError e = ComparePoses(world[0].inverse() * world[i],
-                                     scans[0].reference_world_from_scan->inverse() * *scans[i].reference_world_from_scan);
+    const PoseError e = ComparePoses(world[0].inverse() * world[i], scans[0].reference_world_from_scan->inverse() *
+                                                                        *scans[i].reference_world_from_scan);
     pos = std::max(pos, e.position_m);
     ang = std::max(ang, e.angle_rad);
   }
@@ -109,8 +110,9 @@ TEST(RegisterFromCurrentPoses, StanfordBunnyPerturbedBackToBunConf) {
       EXPECT_EQ(l.method, "none+em");
     }
     const auto [pos, ang] = WorstError(scans, world);
-    std::printf("bunny --coarse none --fine em%s: %d tree + %d extra links, worst %.2f mm %.3f deg (start %.2f mm %.2f deg)\n",
-                global ? " --global" : "", tree, extra, pos * 1e3, ang * kDeg, start_pos * 1e3, start_ang * kDeg);
+    std::printf(
+        "bunny --coarse none --fine em%s: %d tree + %d extra links, worst %.2f mm %.3f deg (start %.2f mm %.2f deg)\n",
+        global ? " --global" : "", tree, extra, pos * 1e3, ang * kDeg, start_pos * 1e3, start_ang * kDeg);
     EXPECT_EQ(tree, 3);
     EXPECT_EQ(r->global_links.empty(), !global);
     if (global) {
