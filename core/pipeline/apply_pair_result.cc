@@ -58,9 +58,15 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   const Eigen::Isometry3d delta = project.scans[c].registered
                                       ? Eigen::Isometry3d(new_pose * project.scans[c].world_from_scan.inverse())
                                       : Eigen::Isometry3d::Identity();
-  for (int i : moved) project.scans[i].world_from_scan = delta * project.scans[i].world_from_scan;
+  for (int i : moved) {
+    project.scans[i].world_from_scan = delta * project.scans[i].world_from_scan;
+    // The stored coarse pose belongs to the automatic run this edit replaces (the report's
+    // "after coarse" errors would otherwise describe a registration that is no longer there).
+    project.scans[i].coarse_world_from_scan.reset();
+  }
   project.scans[c].world_from_scan = new_pose;
   project.scans[c].registered = true;
+  project.scans[c].unregistered_reason.clear();
   if (old_parent != link.parent && project.root != link.child) project.scans[c].parent_override = link.parent;
 
   // The new link replaces the child's tree link and any earlier record of the same pair.

@@ -31,6 +31,8 @@ io::Project Tree() {
     s.name = "s" + std::to_string(i + 1);
     s.world_from_scan = poses[i];
     s.registered = i < 4;
+    if (s.registered) s.coarse_world_from_scan = poses[i];
+    else s.unregistered_reason = "no link";
     p.scans.push_back(s);
   }
   p.root = "s1";
@@ -63,6 +65,11 @@ TEST(ApplyPairResult, MovesTheChildAndTheScansRegisteredThroughIt) {
   EXPECT_EQ(p.links.back().method, "epnp+keypoints");
   EXPECT_EQ(p.scans[1].parent_override.value_or(""), "s4");
   EXPECT_EQ(p.links.size(), before.links.size());  // the failed attempt s4 -> s3 is kept
+  // The moved scans' coarse poses described the replaced automatic run; the others keep theirs.
+  EXPECT_FALSE(p.scans[1].coarse_world_from_scan.has_value());
+  EXPECT_FALSE(p.scans[2].coarse_world_from_scan.has_value());
+  EXPECT_TRUE(p.scans[0].coarse_world_from_scan.has_value());
+  EXPECT_TRUE(p.scans[3].coarse_world_from_scan.has_value());
 }
 
 TEST(ApplyPairResult, SameParentReplacesTheLinkWithoutAnOverride) {
@@ -82,6 +89,7 @@ TEST(ApplyPairResult, RegistersAnUnregisteredChild) {
   ASSERT_TRUE(ApplyPairResult(link, p).ok());
   EXPECT_TRUE(p.scans[4].registered);
   EXPECT_TRUE(p.scans[4].world_from_scan.isApprox(Pose(3, 3, 0), 1e-12));
+  EXPECT_TRUE(p.scans[4].unregistered_reason.empty());
 }
 
 TEST(ApplyPairResult, RefusesCyclesFailedLinksAndUnregisteredParents) {
