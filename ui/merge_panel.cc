@@ -217,7 +217,7 @@ void MergePanel::OnJobSucceeded(const QString&, const std::any& result) {
   if (const auto* merged = std::any_cast<MergedMesh>(&result)) {
     mesh_ = merged->mesh;
     scene_->SetMesh(mesh_);
-    summary_->setText(tr("%L1 triangles, %L2 vertices from %3 scans (%4, %5 mm voxels) in %6 s.")
+    summary_->setText(tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
                           .arg(mesh_->triangles.size())
                           .arg(mesh_->vertices.size())
                           .arg(merged->scans)

@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace scanreg::ui {
 namespace {
@@ -23,13 +24,36 @@ namespace {
 // Points drawn by a full-resolution cloud while the camera moves.
 constexpr int kInteractivePointsPerScan = 60000;
 
-// Every step-th valid point (all when max_points is 0), as vertices with colours.
+// A well-mixed hash of a cell index (splitmix64's finaliser).
+std::uint64_t MixIndex(std::uint64_t x) {
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+// About one valid point in `step`, spread without a pattern (every step-th cell of the row-major
+// grid would draw stripes), at most max_points; every valid point when max_points is 0.
+std::vector<std::size_t> SampleCells(const Scan& scan, std::size_t max_points) {
+  const std::size_t valid = scan.CountValid();
+  // 3 % fewer than the budget on average, so that the random count stays below it.
+  const double keep = max_points == 0 ? 1.0 : std::min(1.0, 0.97 * max_points / std::max<double>(1.0, valid));
+  const std::uint64_t threshold = keep >= 1.0 ? ~0ULL : static_cast<std::uint64_t>(keep * 18446744073709551615.0);
+  std::vector<std::size_t> cells;
+  cells.reserve(static_cast<std::size_t>(keep * valid) + 16);
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid[i] || MixIndex(i) > threshold) continue;
+    if (max_points != 0 && cells.size() == max_points) break;
+    cells.push_back(i);
+  }
+  return cells;
+}
+
+// The sampled valid points as vertices with colours.
 vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen::Isometry3d& pose,
                                                    const Eigen::Vector3d& origin, CloudColouring colouring,
                                                    const double rgb[3], std::size_t max_points) {
-  const std::size_t valid = scan.CountValid();
-  const std::size_t step = max_points == 0 ? 1 : std::max<std::size_t>(1, (valid + max_points - 1) / max_points);
-  const std::size_t n = (valid + step - 1) / step;
+  const std::vector<std::size_t> cells = SampleCells(scan, max_points);
+  const std::size_t n = cells.size();
   auto xyz = vtkSmartPointer<vtkFloatArray>::New();
   xyz->SetNumberOfComponents(3);
   xyz->SetNumberOfTuples(static_cast<vtkIdType>(n));
@@ -39,9 +63,8 @@ vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen
   float* p = xyz->WritePointer(0, static_cast<vtkIdType>(3 * n));
   unsigned char* c = colours->WritePointer(0, static_cast<vtkIdType>(3 * n));
   const Eigen::Isometry3d shifted = Eigen::Translation3d(-origin) * pose;
-  std::size_t k = 0, out = 0;
-  for (std::size_t i = 0; i < scan.size() && out < n; ++i) {
-    if (!scan.valid[i] || (k++ % step) != 0) continue;
+  for (std::size_t out = 0; out < n; ++out) {
+    const std::size_t i = cells[out];
     const Eigen::Vector3d q = shifted * scan.points[i].cast<double>();
     for (int d = 0; d < 3; ++d) p[3 * out + d] = static_cast<float>(q[d]);
     for (int d = 0; d < 3; ++d) {
@@ -49,7 +72,6 @@ vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen
                            ? static_cast<unsigned char>(std::clamp(scan.reflectance[i], 0.0f, 1.0f) * 255)
                            : static_cast<unsigned char>(rgb[d] * 255);
     }
-    ++out;
   }
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetData(xyz);

@@ -9,6 +9,7 @@
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/merge_panel.h"
+#include "ui/pair_inspector.h"
 #include "ui/scan_scene.h"
 #include "ui/view_3d.h"
 
@@ -57,6 +58,14 @@ std::vector<ScreenshotView> ScreenshotViews() {
        [](MainWindow& w) {
          ShowMeshOnly(w);
          if (auto* dock = w.findChild<QDockWidget*>("MergePanelDock")) dock->raise();
+       },
+       [](MainWindow& w) { return w.Screenshot(); }},
+      // The pair view replaces the 3D view's scene: keep it last.
+      {"pair_view.png", "",
+       [](MainWindow& w) {
+         const std::vector<io::ProjectScan>& scans = w.project().scans;
+         if (scans.size() >= 3) w.pairInspector()->OpenPair(QString::fromStdString(scans[1].name),
+                                                             QString::fromStdString(scans[2].name));
        },
        [](MainWindow& w) { return w.Screenshot(); }},
   };
@@ -142,7 +151,17 @@ void ScreenshotTour::ShootNext() {
     dock->show();
   }
   if (view.prepare) view.prepare(*window_);
-  QTimer::singleShot(kSettleMs, this, [this, dock] {
+  Grab(dock, 0);
+}
+
+void ScreenshotTour::Grab(QDockWidget* dock, int idle_checks) {
+  QTimer::singleShot(kSettleMs, this, [this, dock, idle_checks] {
+    // A view whose preparation started jobs (a pair registration) is grabbed once the worker has
+    // been idle for two checks in a row (a queued job may start right after another).
+    if (window_->jobs()->busy() || idle_checks < 1) {
+      Grab(dock, window_->jobs()->busy() ? 0 : idle_checks + 1);
+      return;
+    }
     const ScreenshotView& view = views_[next_];
     const QImage image = view.grab(*window_);
     if (dock) dock->setFloating(false);

@@ -1,5 +1,6 @@
 // scanreg --screenshots DIR: opens the demo project, registers it, merges it and saves a PNG of
-// each main view. To add a view, add an entry to ScreenshotViews().
+// each main view. To add a view, add an entry to ScreenshotViews(); its `prepare` may start jobs
+// (the tour grabs once the worker is idle).
 #pragma once
 
 #include <QImage>
@@ -9,6 +10,8 @@
 #include <vector>
 
 #include "core/merge/merge_options.h"
+
+class QDockWidget;
 
 namespace scanreg::ui {
 
@@ -45,6 +48,7 @@ class ScreenshotTour : public QObject {
  private:
   void OnJobDone(const QString& title, bool ok, const QString& message);
   void ShootNext();
+  void Grab(QDockWidget* dock, int idle_checks);
 
   MainWindow* window_;
   bool Prepare();
