@@ -32,8 +32,10 @@ int main(int argc, char** argv) {
   QCommandLineOption demo("demo", "Open the simulated demo project.");
   QCommandLineOption reg("register", "Register the opened project.");
   QCommandLineOption screenshot("screenshot", "Render the main window to FILE (PNG) when done, and exit.", "FILE");
-  QCommandLineOption screenshots("screenshots", "Open, register and merge the demo project, save a PNG of each "
-                                 "main view into DIR, and exit.", "DIR");
+  QCommandLineOption screenshots("screenshots",
+                                 "Open, register and merge the demo project, save a PNG of each "
+                                 "main view into DIR, and exit.",
+                                 "DIR");
   parser.addOptions({demo, reg, screenshot, screenshots});
   parser.addPositionalArgument("project", "A project file (*.scanreg.json) to open.", "[project]");
   parser.process(app);

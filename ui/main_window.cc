@@ -161,17 +161,17 @@ void MainWindow::CreateMenus() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->setObjectName("FileMenu");
   // "*.ptx *.ply *.pcd" from io::SupportedScanExtensions() (".ptx, .ply, .pcd").
-  const QString scan_filter = tr("Scans (%1);;All files (*)")
-                                  .arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
+  const QString scan_filter =
+      tr("Scans (%1);;All files (*)").arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
   QAction* create = file->addAction(tr("&New project…"), this, [this, scan_filter] {
     if (!MaybeSaveChanges()) return;
-    const QStringList files = QFileDialog::getOpenFileNames(this, tr("New project: choose the scans"), LastDir(),
-                                                            scan_filter);
+    const QStringList files =
+        QFileDialog::getOpenFileNames(this, tr("New project: choose the scans"), LastDir(), scan_filter);
     if (files.isEmpty()) return;
     RememberDir(files.first());
-    const QString path = QFileDialog::getSaveFileName(this, tr("New project: save it as"),
-                                                      LastDir() + "/project.scanreg.json",
-                                                      tr("scanreg projects (*.scanreg.json)"));
+    const QString path =
+        QFileDialog::getSaveFileName(this, tr("New project: save it as"), LastDir() + "/project.scanreg.json",
+                                     tr("scanreg projects (*.scanreg.json)"));
     if (!path.isEmpty()) NewProject(files, path);
   });
   create->setShortcut(QKeySequence::New);

@@ -165,7 +165,8 @@ bool MergePanel::Run() {
   if (window_->jobs()->busy()) return false;
   const merge::MergeOptions options = Options();
   if (Status s = options.Validate(); !s) {
-    ShowError(tr("Cannot merge"), QString::fromStdString(s.error().message) + tr("\nChange the option and merge again."));
+    ShowError(tr("Cannot merge"),
+              QString::fromStdString(s.error().message) + tr("\nChange the option and merge again."));
     return false;
   }
   SaveOptions();
@@ -180,14 +181,14 @@ bool MergePanel::Run() {
                        "scans, Ctrl+R), then merge."));
     return false;
   }
-  return window_->jobs()->Start(kMergeTitle, [scans = std::move(scans), options](ProgressSink& progress,
-                                                                                const CancelToken& cancel) {
-    Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
-    if (!r) return Expected<std::any>(r.error());
-    MergedMesh merged{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
-                      options.voxel_m};
-    return Expected<std::any>(std::any(std::move(merged)));
-  });
+  return window_->jobs()->Start(
+      kMergeTitle, [scans = std::move(scans), options](ProgressSink& progress, const CancelToken& cancel) {
+        Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
+        if (!r) return Expected<std::any>(r.error());
+        MergedMesh merged{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
+                          options.voxel_m};
+        return Expected<std::any>(std::any(std::move(merged)));
+      });
 }
 
 bool MergePanel::ExportMesh(const QString& path) {

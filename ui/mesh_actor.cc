@@ -30,8 +30,8 @@ vtkSmartPointer<vtkActor> MakeMeshActor(const merge::Mesh& mesh, const Eigen::Ve
   ids->SetNumberOfValues(static_cast<vtkIdType>(3 * mesh.triangles.size()));
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Eigen::Vector3i& tri = mesh.triangles[t];
-    const Eigen::Vector3f n = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
-                                  .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+    const Eigen::Vector3f n =
+        (mesh.vertices[tri[1]] - mesh.vertices[tri[0]]).cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
     for (int k = 0; k < 3; ++k) {
       sums[tri[k]] += n;
       ids->SetValue(static_cast<vtkIdType>(3 * t + k), tri[k]);

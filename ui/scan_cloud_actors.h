@@ -21,9 +21,9 @@ namespace scanreg::ui {
 enum class CloudColouring { kPerScan, kReflectance };
 
 struct ScanActors {
-  std::vector<vtkSmartPointer<vtkActor>> clouds;   // per project scan; null when the scan is not drawn
-  std::vector<vtkSmartPointer<vtkActor>> markers;  // scanner positions, per project scan (or null)
-  vtkSmartPointer<vtkActor> links;                 // the tree's links; null without links
+  std::vector<vtkSmartPointer<vtkActor>> clouds;       // per project scan; null when the scan is not drawn
+  std::vector<vtkSmartPointer<vtkActor>> markers;      // scanner positions, per project scan (or null)
+  vtkSmartPointer<vtkActor> links;                     // the tree's links; null without links
   std::vector<vtkSmartPointer<vtkActor>> All() const;  // the non-null actors
 };
 

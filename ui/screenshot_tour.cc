@@ -51,7 +51,9 @@ std::vector<ScreenshotView> ScreenshotViews() {
       {"view_3d_scans.png", "", [](MainWindow& w) { w.scene()->SetShowMesh(false); },
        [](MainWindow& w) { return w.view3d()->GrabImage(); }},
       {"scan_network.png", "ScanNetworkDock", {}, [](MainWindow& w) { return GrabDock(w, "ScanNetworkDock"); }},
-      {"confusion_matrix.png", "ConfusionMatrixDock", {},
+      {"confusion_matrix.png",
+       "ConfusionMatrixDock",
+       {},
        [](MainWindow& w) { return GrabTable(w, "ConfusionMatrixDock"); }},
       {"merge_preview.png", "", ShowMeshOnly, [](MainWindow& w) { return w.view3d()->GrabImage(); }},
       {"merge_panel.png", "",
@@ -64,8 +66,8 @@ std::vector<ScreenshotView> ScreenshotViews() {
       {"pair_view.png", "",
        [](MainWindow& w) {
          const std::vector<io::ProjectScan>& scans = w.project().scans;
-         if (scans.size() >= 3) w.pairInspector()->OpenPair(QString::fromStdString(scans[1].name),
-                                                             QString::fromStdString(scans[2].name));
+         if (scans.size() >= 3)
+           w.pairInspector()->OpenPair(QString::fromStdString(scans[1].name), QString::fromStdString(scans[2].name));
        },
        [](MainWindow& w) { return w.Screenshot(); }},
   };

@@ -3,6 +3,14 @@
 // cancel a merge, recent projects, new project / add scans, per-scan visibility, level of detail,
 // remembered options and `scanreg --screenshots`. A small street (4 stations, 1000 x 250) is
 // simulated and registered once; the tests open the saved registration.
+#include <QVTKOpenGLNativeWidget.h>
+#include <vtkActor.h>
+#include <vtkOBJReader.h>
+#include <vtkPLYReader.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkSTLReader.h>
 #include <QCheckBox>
 #include <QDir>
 #include <QDockWidget>
@@ -14,15 +22,7 @@
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTimer>
-#include <QVTKOpenGLNativeWidget.h>
 #include <QtTest/QtTest>
-#include <vtkActor.h>
-#include <vtkOBJReader.h>
-#include <vtkPLYReader.h>
-#include <vtkPolyData.h>
-#include <vtkPolyDataMapper.h>
-#include <vtkSTLReader.h>
-#include <vtkPointData.h>
 
 #include <cmath>
 
@@ -112,9 +112,7 @@ std::vector<int> RegisteredRows(const MainWindow& window) {
   return rows;
 }
 
-QString NameOf(const MainWindow& window, int row) {
-  return QString::fromStdString(window.project().scans[row].name);
-}
+QString NameOf(const MainWindow& window, int row) { return QString::fromStdString(window.project().scans[row].name); }
 
 }  // namespace
 
@@ -189,7 +187,8 @@ class MergeProjectTest : public QObject {
     for (const Eigen::Vector3f& v : mesh->vertices) {
       double nearest = 1e9;
       for (const auto& s : window.project().scans)
-        if (s.registered) nearest = std::min(nearest, (mesh->origin + v.cast<double>() - s.world_from_scan.translation()).norm());
+        if (s.registered)
+          nearest = std::min(nearest, (mesh->origin + v.cast<double>() - s.world_from_scan.translation()).norm());
       worst = std::max(worst, nearest);
     }
     const double reach = QuickMerge().max_range_m + QuickMerge().Band() + QuickMerge().voxel_m;
@@ -215,6 +214,12 @@ class MergeProjectTest : public QObject {
     }
     QCOMPARE(FilesIn(out.path()), QStringList({"mesh.obj", "mesh.ply", "mesh.stl"}));  // no temporary left
     QVERIFY(!window.dirty());  // merging does not change the project
+
+    // An edit of the registration drops the mesh: it no longer matches the poses.
+    window.ApplyEdit(window.project(), false);
+    QVERIFY(window.mergePanel()->mesh() == nullptr);
+    QVERIFY(window.scene()->MeshActor() == nullptr);
+    QVERIFY(!window.mergePanel()->ExportMesh(out.filePath("stale.ply")));
   }
 
   void CancelledMergeLeavesNoMeshNoFileAndTheProjectUnchanged() {
@@ -332,8 +337,8 @@ class MergeProjectTest : public QObject {
     QCOMPARE(static_cast<int>(window.project().scans.size()), 4);
 
     // Unsaved changes: Cancel keeps them, Discard lets the next action go on.
-    for (const auto& [button, expected] : {std::make_pair(QMessageBox::Cancel, false),
-                                           std::make_pair(QMessageBox::Discard, true)}) {
+    for (const auto& [button, expected] :
+         {std::make_pair(QMessageBox::Cancel, false), std::make_pair(QMessageBox::Discard, true)}) {
       QTimer::singleShot(200, &window, [&window, button = button] {
         auto* prompt = window.findChild<QMessageBox*>("UnsavedChangesDialog");
         if (prompt) prompt->button(button)->click();
