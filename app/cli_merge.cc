@@ -14,7 +14,7 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto args = ParseOrHelp(
       "merge", "PROJECT.scanreg.json --out MESH.ply|.obj|.stl [options]   merges the registered scans", argv,
       {{"voxel", true, false, "METRES   voxel size (default 0.02)"},
-       {"method", true, false, "tsdf|ml   Curless-Levoy TSDF (default) or S's maximum-likelihood distance (slower)"},
+       {"method", true, false, "ml|tsdf   maximum-likelihood distance (S, default) or Curless-Levoy TSDF (faster)"},
        {"max-range", true, false, "METRES   leave out returns farther from their scanner (default: all)"},
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},

