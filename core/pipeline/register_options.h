@@ -56,7 +56,7 @@ struct RegisterOptions {
   // Loop check (beyond W): each scan is also registered to its best other neighbour; a loop that
   // does not close within these tolerances fails both links (wrong links on repeated façades).
   bool verify_loops = true;
-  bool verify_all_links = false;     // false: only weak links are checked (ok links carry enough evidence)
+  bool verify_all_links = false;     // false: only weak links are checked (global registration checks all)
   int min_check_matches = 20;        // a neighbour needs this many matches to serve as a check
   double loop_tolerance_m = 0.10;
   double loop_tolerance_rad = 0.5 * M_PI / 180.0;

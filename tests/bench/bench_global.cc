@@ -82,6 +82,7 @@ void Street(Table& table, bool quick) {
   const std::string size = std::to_string(sim.stations) + " stations " + std::to_string(sim.scanner.cols) + "x" +
                            std::to_string(sim.scanner.rows);
   pipeline::RegisterOptions tree_options;
+  tree_options.global = false;  // as `register --no-global`
   tree_options.feature_cache_dir =
       std::filesystem::temp_directory_path() / ("scanreg-bench-global-" + std::to_string(::getpid()));
   pipeline::RegisterOptions global_options = tree_options;
