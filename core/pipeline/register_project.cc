@@ -285,6 +285,8 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
     if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;
   }
   project.confusion = result.confusion;
+  project.confusion_scans.clear();
+  for (const io::ProjectScan& s : project.scans) project.confusion_scans.push_back(s.name);
   // Keep the user's accept / reject decisions on links that were recomputed.
   std::vector<io::LinkRecord> links = result.links;
   for (io::LinkRecord& l : links) {
