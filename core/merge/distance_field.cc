@@ -15,9 +15,8 @@ constexpr int kMaxBins = 512;
 inline double FastErf(double x) {
   const double a = std::abs(x);
   const double t = 1.0 / (1.0 + 0.3275911 * a);
-  const double y =
-      1.0 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) * t *
-                std::exp(-a * a);
+  const double y = 1.0 - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592) *
+                             t * std::exp(-a * a);
   return x < 0 ? -y : y;
 }
 
@@ -59,7 +58,7 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
     const Eigen::Vector3f los = (closest[i] - patches.scanner[p.scan]).normalized();
     const Eigen::Vector3f dir = d > 1e-7f ? Eigen::Vector3f(to_x / d) : p.normal;
     const float cos_phi = std::max(std::abs(los.dot(dir)), 0.2f);  // guard phi near 90 degrees
-    const float side = -to_x.dot(p.normal);                       // (p' - x) . n
+    const float side = -to_x.dot(p.normal);                        // (p' - x) . n
     const float vote = side < 0 ? 1.0f : (side > 0 ? -1.0f : 0.0f);
     if (d == d_min) nearest_vote = vote == 0.0f ? 1.0f : vote;
     near.push_back({d, float(sigma) * cos_phi, vote});
@@ -130,8 +129,8 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
   for (auto it = candidates.begin(); it != candidates.end(); ++it) {
     const Patch& p = patches.patches[*it];
     if (!patches.Reaches(*it, x, float(band))) continue;
-    const float d = (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]],
-                                            patches.points[p.v[2]]) - x).norm();
+    const float d =
+        (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]) - x).norm();
     if (d > band || d >= nearest[p.scan].first) continue;
     nearest[p.scan] = {d, *it};
     if (patches.views[p.scan].empty()) continue;

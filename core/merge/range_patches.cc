@@ -27,8 +27,9 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
   const int n = int(a.size());
   if (n < 2) return false;
   const bool inc = a.back() > a.front();
-  const int i = int((inc ? std::lower_bound(a.begin(), a.end(), v)
-                         : std::lower_bound(a.begin(), a.end(), v, std::greater<float>())) - a.begin());
+  const int i = int(
+      (inc ? std::lower_bound(a.begin(), a.end(), v) : std::lower_bound(a.begin(), a.end(), v, std::greater<float>())) -
+      a.begin());
   if (i == 0) {
     if (std::abs(v - a[0]) > 0.5f * std::abs(a[1] - a[0])) return false;
     *i0 = 0, *t = 0.0f;
@@ -46,8 +47,7 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
 
 }  // namespace
 
-bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range,
-                           float* voxel_range) const {
+bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range, float* voxel_range) const {
   if (empty()) return false;
   const Eigen::Vector3f q = scan_from_world * (x - eye);
   const float r = q.norm();

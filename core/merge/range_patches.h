@@ -16,9 +16,9 @@
 namespace scanreg::merge {
 
 struct Patch {
-  std::array<int, 3> v;     // indices into RangePatches::points
-  Eigen::Vector3f normal;   // unit, facing the scanner that saw it
-  int scan = 0;             // index into the input scans
+  std::array<int, 3> v;    // indices into RangePatches::points
+  Eigen::Vector3f normal;  // unit, facing the scanner that saw it
+  int scan = 0;            // index into the input scans
 };
 
 // A scan's range image for Curless–Levoy projection (only for scans with an angular grid).
@@ -35,12 +35,12 @@ struct RangeView {
 };
 
 struct RangePatches {
-  std::vector<RangeView> views;             // per scan (empty views for scans without angles)
-  Eigen::Vector3d origin;                   // world position of (0, 0, 0)
-  std::vector<Eigen::Vector3f> points;      // world minus origin
+  std::vector<RangeView> views;         // per scan (empty views for scans without angles)
+  Eigen::Vector3d origin;               // world position of (0, 0, 0)
+  std::vector<Eigen::Vector3f> points;  // world minus origin
   std::vector<Patch> patches;
-  std::vector<Eigen::Vector3f> scanner;     // per scan: scanner position, world minus origin
-  double max_patch_radius = 0.0;            // metres: largest centroid-to-vertex distance
+  std::vector<Eigen::Vector3f> scanner;  // per scan: scanner position, world minus origin
+  double max_patch_radius = 0.0;         // metres: largest centroid-to-vertex distance
 
   // Indices of the patches that may lie within radius_m of x (bounding-sphere test), each once.
   // Patches spanning more than 16^3 hash cells are never returned. Thread-safe.

@@ -32,7 +32,7 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
   }
   if (selected.empty()) {
     return MakeError(ErrorCode::kInvalidArgument,
-                     scans.empty() ? "merge: the project has no scan" 
+                     scans.empty() ? "merge: the project has no scan"
                                    : "merge: no registered scan to merge (register the project first)");
   }
   return merge::MergeScanSet(selected, options, progress, cancel);

@@ -14,8 +14,8 @@
 
 #ifdef SCANREG_BENCH_VTK
 #include <vtkCellArray.h>
-#include <vtkFlyingEdges3D.h>
 #include <vtkFloatArray.h>
+#include <vtkFlyingEdges3D.h>
 #include <vtkImageData.h>
 #include <vtkMarchingCubes.h>
 #include <vtkNew.h>
@@ -43,8 +43,8 @@ double SurfaceRms(const merge::Mesh& mesh) {
 void AddRows(Table& table, const std::string& who, const merge::Mesh& mesh, double seconds, const std::string& size) {
   const merge::EdgeCounts edges = merge::CountEdges(mesh);
   char note[256];
-  std::snprintf(note, sizeof note, "%s; %zu vertices, %zu boundary / %zu non-manifold edges, RMS %.1f um",
-                size.c_str(), mesh.vertices.size(), edges.boundary, edges.non_manifold, SurfaceRms(mesh) * 1e6);
+  std::snprintf(note, sizeof note, "%s; %zu vertices, %zu boundary / %zu non-manifold edges, RMS %.1f um", size.c_str(),
+                mesh.vertices.size(), edges.boundary, edges.non_manifold, SurfaceRms(mesh) * 1e6);
   table.Add({"merge", "marching cubes, torus (" + who + "): time", seconds, "s", note});
   table.Add({"merge", "marching cubes, torus (" + who + "): triangles", double(mesh.triangles.size()), "",
              merge::IsWatertight(mesh) ? "watertight" : "NOT watertight"});

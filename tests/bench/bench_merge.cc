@@ -87,8 +87,8 @@ void TwoPlaneModel(Table& table, bool quick) {
     const double a = (5.0 + i * 80.0 / 9.0) * M_PI / 180.0;
     const Eigen::Vector3d target(0.35, 0.35, 0.0);
     const Eigen::Vector3d eye = target + distance * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
-    Scan s = test::MakeWindowScan(cast, eye, target, rows, cols, 0.3, sigma, 1000 + i, "view" + std::to_string(i),
-                                  half_el);
+    Scan s =
+        test::MakeWindowScan(cast, eye, target, rows, cols, 0.3, sigma, 1000 + i, "view" + std::to_string(i), half_el);
     for (std::size_t k = 0; k < s.size(); ++k) {
       if (!s.valid[k]) continue;
       const Eigen::Vector3d p = s.world_from_scan * s.points[k].cast<double>();
@@ -127,8 +127,7 @@ void TwoPlaneModel(Table& table, bool quick) {
     const double rms = std::sqrt(s2 / std::max<std::size_t>(m, 1));
     table.Add({"merge", name, rms, "m",
                Fmt("%.0f %% of input; ", 100.0 * rms / input_rms) +
-                   (method == merge::MergeMethod::kTsdf ? "S's [19] (averaged distance) 0.0293"
-                                                         : "S 0.0268 (66 %)") +
+                   (method == merge::MergeMethod::kTsdf ? "S's [19] (averaged distance) 0.0293" : "S 0.0268 (66 %)") +
                    Fmt("; %.1f s", seconds)});
   }
 }
@@ -136,8 +135,7 @@ void TwoPlaneModel(Table& table, bool quick) {
 void Bunny(Table& table, bool quick) {
   const char* env = std::getenv("SCANREG_REALDATA");
   const std::filesystem::path root =
-      env ? std::filesystem::path(env)
-          : std::filesystem::path(__FILE__).parent_path() / "../../../shared/realdata";
+      env ? std::filesystem::path(env) : std::filesystem::path(__FILE__).parent_path() / "../../../shared/realdata";
   const std::filesystem::path dir = root / "stanford_bunny";
   if (!std::filesystem::exists(dir / "bun.conf")) {
     table.Add({"merge", "Stanford bunny", 0.0, "", "skipped: real data not found (set SCANREG_REALDATA)"});
@@ -195,8 +193,10 @@ void Bunny(Table& table, bool quick) {
     const double cell = 0.004;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const Eigen::Vector3f c = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
-                                 mesh.vertices[mesh.triangles[t][2]]) / 3.0f;
-      hash[{int(std::floor(c.x() / cell)), int(std::floor(c.y() / cell)), int(std::floor(c.z() / cell))}].push_back(int(t));
+                                 mesh.vertices[mesh.triangles[t][2]]) /
+                                3.0f;
+      hash[{int(std::floor(c.x() / cell)), int(std::floor(c.y() / cell)), int(std::floor(c.z() / cell))}].push_back(
+          int(t));
     }
     double s2 = 0.0;
     std::size_t m = 0, far = 0;
@@ -205,7 +205,8 @@ void Bunny(Table& table, bool quick) {
         if (!s.valid[k]) continue;
         const Eigen::Vector3f p = ((s.world_from_scan * s.points[k].cast<double>()) - mesh.origin).cast<float>();
         float best = 1e9f;
-        const int ci = int(std::floor(p.x() / cell)), cj = int(std::floor(p.y() / cell)), ck = int(std::floor(p.z() / cell));
+        const int ci = int(std::floor(p.x() / cell)), cj = int(std::floor(p.y() / cell)),
+                  ck = int(std::floor(p.z() / cell));
         for (int dz = -1; dz <= 1; ++dz)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -214,7 +215,9 @@ void Bunny(Table& table, bool quick) {
               for (int t : it->second) {
                 const auto& tri = mesh.triangles[t];
                 best = std::min(best, (merge::ClosestPointOnTriangle(p, mesh.vertices[tri[0]], mesh.vertices[tri[1]],
-                                                                     mesh.vertices[tri[2]]) - p).norm());
+                                                                     mesh.vertices[tri[2]]) -
+                                       p)
+                                          .norm());
               }
             }
         if (best > 0.004f) {
@@ -225,13 +228,14 @@ void Bunny(Table& table, bool quick) {
       }
     }
     const double rms = std::sqrt(s2 / std::max<std::size_t>(m, 1));
-    const std::string note = std::to_string(points / 1000) + " k points; " + std::to_string(mesh.vertices.size()) +
-                             " vertices";
+    const std::string note =
+        std::to_string(points / 1000) + " k points; " + std::to_string(mesh.vertices.size()) + " vertices";
     table.Add({"merge", what + ": triangles", double(mesh.triangles.size()), "", note});
     table.Add({"merge", what + ": time", seconds, "s", Fmt("%.1f s CPU", cpu)});
     table.Add({"merge", what + ": peak memory", peak, "MiB", "process peak during the merge (input included)"});
     table.Add({"merge", what + ": RMS input points to surface", rms * 1000, "mm",
-               Fmt("every 7th point; %.1f %% farther than 4 mm (not counted)", 100.0 * far / std::max<std::size_t>(m + far, 1))});
+               Fmt("every 7th point; %.1f %% farther than 4 mm (not counted)",
+                   100.0 * far / std::max<std::size_t>(m + far, 1))});
   }
 }
 

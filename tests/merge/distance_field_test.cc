@@ -70,8 +70,7 @@ TEST_P(GroupedField, EqualsPerPointEvaluation) {
   EXPECT_LT(sign_flips, known / 200) << sign_flips << " of " << known;
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, GroupedField,
-                         ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf));
+INSTANTIATE_TEST_SUITE_P(Methods, GroupedField, ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf));
 
 }  // namespace
 }  // namespace scanreg::merge
