@@ -1,8 +1,10 @@
 #include "ui/scan_scene.h"
 
 #include <vtkActor.h>
+#include <vtkActorCollection.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
+#include <vtkRenderer.h>
 
 #include <algorithm>
 
@@ -11,15 +13,48 @@
 
 namespace scanreg::ui {
 
+namespace {
+
+// Whether the drawing of `b` would be that of `a`: the same scans (by their point buffers: a
+// reloaded scan has new ones), poses, registered flags and drawn links.
+bool SameDrawing(const io::Project& a, const std::vector<const void*>& a_data, const io::Project& b,
+                 const std::vector<const void*>& b_data) {
+  if (a.file != b.file || a.scans.size() != b.scans.size() || a.links.size() != b.links.size() || a_data != b_data)
+    return false;
+  for (std::size_t i = 0; i < a.scans.size(); ++i) {
+    const io::ProjectScan &x = a.scans[i], &y = b.scans[i];
+    if (x.name != y.name || x.registered != y.registered || x.world_from_scan.matrix() != y.world_from_scan.matrix())
+      return false;
+  }
+  for (std::size_t i = 0; i < a.links.size(); ++i) {
+    const io::LinkRecord &x = a.links[i], &y = b.links[i];
+    if (x.parent != y.parent || x.child != y.child || x.status != y.status) return false;
+  }
+  return true;
+}
+
+std::vector<const void*> PointBuffers(const std::vector<Scan>& scans) {
+  std::vector<const void*> data;
+  for (const Scan& s : scans) data.push_back(s.points.data());
+  return data;
+}
+
+}  // namespace
+
 ScanScene::ScanScene(View3d* view, QObject* parent) : QObject(parent), view_(view) {}
 
 void ScanScene::ShowScans(const io::Project& project, const std::vector<Scan>& scans) {
+  std::vector<const void*> data = PointBuffers(scans);
+  // Nothing to redraw after a job that changed neither (an export, a merge): no GUI-thread stall;
+  // unless another view (the pair overlay) has replaced the scene's actors meanwhile.
+  if (scans_ == &scans && SameDrawing(project, data, project_, data_) && ViewShowsScene()) return;
   // Frame the scene again only when it is another one: another project, other scans, or the
   // registration moved the origin (the first registered scan).
   const bool same = project.file == project_.file && project.scans.size() == project_.scans.size() &&
                     SceneOrigin(project) == SceneOrigin(project_) && scans_ != nullptr;
   project_ = project;
   scans_ = &scans;
+  data_ = std::move(data);
   Rebuild(!same);
 }
 
@@ -69,6 +104,11 @@ vtkActor* ScanScene::CloudActor(const QString& name) const {
   return i >= 0 && i < static_cast<int>(actors_.clouds.size()) ? actors_.clouds[i].Get() : nullptr;
 }
 
+bool ScanScene::ViewShowsScene() const {
+  if (view_->PropCount() != shown_count_) return false;
+  return !first_shown_ || view_->renderer()->GetActors()->IsItemPresent(first_shown_) != 0;
+}
+
 vtkActor* ScanScene::MeshActor() const { return mesh_actor_; }
 
 std::size_t ScanScene::DrawnPoints() const {
@@ -90,6 +130,8 @@ void ScanScene::Rebuild(bool reset_camera) {
   mesh_actor_ = mesh_ ? MakeMeshActor(*mesh_, SceneOrigin(project_)) : nullptr;
   std::vector<vtkSmartPointer<vtkActor>> all = actors_.All();
   if (mesh_actor_) all.push_back(mesh_actor_);
+  first_shown_ = all.empty() ? nullptr : all.front();
+  shown_count_ = static_cast<int>(all.size());
   SetVisibilities();
   view_->SetActors(all, reset_camera);
 }

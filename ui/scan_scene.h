@@ -52,13 +52,17 @@ class ScanScene : public QObject {
   void Rebuild(bool reset_camera);
   void ApplyVisibility();  // sets the actors' visibility and renders
   void SetVisibilities();
+  bool ViewShowsScene() const;  // the view still holds the actors this scene gave it
 
   View3d* view_;
   io::Project project_;
   const std::vector<Scan>* scans_ = nullptr;
+  std::vector<const void*> data_;  // the drawn scans' point buffers
   std::shared_ptr<const merge::Mesh> mesh_;
   ScanActors actors_;
   vtkSmartPointer<vtkActor> mesh_actor_;
+  vtkSmartPointer<vtkActor> first_shown_;  // of the actors given to the view
+  int shown_count_ = 0;
   QSet<QString> hidden_;
   CloudColouring colouring_ = CloudColouring::kPerScan;
   bool full_resolution_ = false;

@@ -205,15 +205,17 @@ class MergeProjectTest : public QObject {
     QVERIFY(window.scene()->CloudActor(name)->GetVisibility());
 
     QTemporaryDir out;
-    for (const QString name : {"mesh.ply", "mesh.obj", "mesh.stl"}) {
-      const QString path = out.filePath(name);
+    vtkActor* cloud = window.scene()->CloudActor(name);
+    for (const QString file : {"mesh.ply", "mesh.obj", "mesh.stl"}) {
+      const QString path = out.filePath(file);
       QVERIFY(window.mergePanel()->ExportMesh(path));
       QVERIFY(WaitForJob(window, 120000));
       const vtkSmartPointer<vtkPolyData> read = ReadMesh(path);
       QCOMPARE(read->GetNumberOfPolys(), triangles);
     }
     QCOMPARE(FilesIn(out.path()), QStringList({"mesh.obj", "mesh.ply", "mesh.stl"}));  // no temporary left
-    QVERIFY(!window.dirty());  // merging does not change the project
+    QCOMPARE(window.scene()->CloudActor(name), cloud);  // the exports did not rebuild the clouds
+    QVERIFY(!window.dirty());                           // merging does not change the project
 
     // An edit of the registration drops the mesh: it no longer matches the poses.
     window.ApplyEdit(window.project(), false);
