@@ -18,7 +18,8 @@
 #include <QVTKOpenGLNativeWidget.h>
 
 #include "core/common/log.h"
-#include "core/pipeline/apply_pair_result.h"
+#include "core/io/project_tree.h"
+#include "core/pipeline/project_edits.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
@@ -29,6 +30,7 @@
 #include "ui/merge_panel.h"
 #include "ui/network_panel.h"
 #include "ui/pair_inspector.h"
+#include "ui/pose_dialog.h"
 #include "ui/project_panels.h"
 #include "ui/scan_cloud_actors.h"
 #include "ui/scan_scene.h"
@@ -226,7 +228,8 @@ void MainWindow::CreateMenus() {
   QMenu* reg = menuBar()->addMenu(tr("&Registration"));
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
   run->setShortcut(Qt::CTRL | Qt::Key_R);
-  project_actions_ = {save, save_as, run, add, report};
+  QAction* edit_pose = reg->addAction(tr("Edit scan &pose…"), this, [this] { EditSelectedScanPose(); });
+  project_actions_ = {save, save_as, run, add, report, edit_pose};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
@@ -341,6 +344,32 @@ pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
   return options;
 }
 
+bool MainWindow::SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents) {
+  io::Project after = project_;
+  if (Status s = pipeline::SetScanPose(scan.toStdString(), world_from_scan, move_dependents, after); !s) {
+    ShowError(tr("Cannot place %1").arg(scan), QString::fromStdString(s.error().message));
+    return false;
+  }
+  undo_->push(new EditCommand(this, tr("place %1 by hand").arg(scan), project_, std::move(after), false));
+  return true;
+}
+
+PoseDialog* MainWindow::EditSelectedScanPose() {
+  const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
+  const int s = item ? project_.FindScan(item->text().toStdString()) : -1;
+  if (s < 0) {
+    ShowError(tr("Edit scan pose"), tr("Select a scan in the scan list first, then choose Registration → Edit scan pose."));
+    return nullptr;
+  }
+  const QString name = item->text();
+  auto* dialog = new PoseDialog(name, project_.scans[s].world_from_scan, this);
+  dialog->setAttribute(Qt::WA_DeleteOnClose);
+  connect(dialog, &QDialog::accepted, this,
+          [this, dialog, name] { SetScanPose(name, dialog->Pose(), dialog->MoveDependents()); });
+  dialog->open();
+  return dialog;
+}
+
 bool MainWindow::UsePairResult(const io::LinkRecord& link) {
   io::Project after = project_;
   if (Status s = pipeline::ApplyPairResult(link, after); !s) {
@@ -406,9 +435,18 @@ void MainWindow::OnJobFailed(const QString& title, const QString& message, bool 
 
 void MainWindow::Refresh() {
   scan_list_->Show(project_, scans_);
+  // The confusion matrix in scan order (root, then as the registration placed the scans), as in the
+  // report; empty when there is none, so no stale matrix is shown.
+  const std::vector<int> order = io::OrderedScanIndices(project_);
   std::vector<std::string> names;
-  for (const io::ProjectScan& s : project_.scans) names.push_back(s.name);
-  confusion_panel_->Show(confusion_, names);  // empty when there is none: no stale matrix
+  for (int i : order) names.push_back(project_.scans[i].name);
+  Eigen::MatrixXi ordered;
+  if (confusion_.rows() == static_cast<Eigen::Index>(order.size()) && confusion_.cols() == confusion_.rows()) {
+    ordered.resize(confusion_.rows(), confusion_.cols());
+    for (std::size_t i = 0; i < order.size(); ++i)
+      for (std::size_t j = 0; j < order.size(); ++j) ordered(i, j) = confusion_(order[i], order[j]);
+  }
+  confusion_panel_->Show(ordered, names);
   network_->Show(project_);
   bool any_registered = false;
   for (const io::ProjectScan& s : project_.scans) any_registered |= s.registered;

@@ -25,6 +25,7 @@ class ConfusionPanel;
 class JobRunner;
 class LogPanel;
 class MergePanel;
+class PoseDialog;
 class NetworkPanel;
 class PairInspector;
 class ScanListPanel;
@@ -64,6 +65,11 @@ class MainWindow : public QMainWindow {
   // The user's edits, undoable. A parent override re-runs the registration when no job runs.
   void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
   void SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject);
+  // Places a scan by hand (pipeline::SetScanPose); false, with a dialog, when refused.
+  bool SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents);
+  // Registration → Edit scan pose…: opens the pose dialog for the scan selected in the scan list
+  // (window-modal, does not block); returns it (null when no scan is selected), for tests.
+  PoseDialog* EditSelectedScanPose();
   QUndoStack* undoStack() const { return undo_; }
   // Replaces the project with an edited version (used by the undo commands).
   void ApplyEdit(const io::Project& project, bool rerun);

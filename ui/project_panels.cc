@@ -53,8 +53,10 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
     setItem(i, 0, name);
     setItem(i, 1, Item(scan ? QString("%1 × %2").arg(scan->cols).arg(scan->rows) : "-"));
     setItem(i, 2, Item(scan ? QString::number(scan->CountValid()) : "-"));
-    QTableWidgetItem* status = Item(s.registered ? tr("registered") : tr("unregistered"), Qt::AlignCenter);
-    status->setForeground(s.registered ? QColor(20, 140, 60) : QColor(190, 60, 40));
+    QTableWidgetItem* status = Item(!s.registered ? tr("unregistered") : s.manual_pose ? tr("manual pose") : tr("registered"),
+                                    Qt::AlignCenter);
+    status->setForeground(!s.registered ? QColor(190, 60, 40) : s.manual_pose ? QColor(200, 130, 0) : QColor(20, 140, 60));
+    if (s.manual_pose) status->setToolTip(tr("Placed by hand (Registration → Edit scan pose): no link evidence"));
     setItem(i, 3, status);
     const Eigen::Vector3d t = s.world_from_scan.translation();
     for (int k = 0; k < 3; ++k) setItem(i, 4 + k, Item(QString::number(t[k], 'f', 3)));

@@ -202,6 +202,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
         scan.coarse_world_from_scan = *t;
       }
       scan.unregistered_reason = s.value("unregistered_reason", "");
+      scan.manual_pose = s.value("manual_pose", false);
       project.scans.push_back(std::move(scan));
     }
     for (const ProjectScan& scan : project.scans) {
@@ -248,6 +249,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
     if (s.parent_override) js["parent_override"] = *s.parent_override;
     if (s.coarse_world_from_scan) js["coarse_world_from_scan"] = PoseToJson(*s.coarse_world_from_scan);
     if (!s.unregistered_reason.empty()) js["unregistered_reason"] = s.unregistered_reason;
+    if (s.manual_pose) js["manual_pose"] = true;
     scans.push_back(std::move(js));
   }
   json links = json::array();

@@ -52,6 +52,9 @@ struct ProjectScan {
   // (W fig. 6 "after coarse") and why the scan could not be registered.
   std::optional<Eigen::Isometry3d> coarse_world_from_scan;
   std::string unregistered_reason;
+  // The user placed the scan by hand (Registration → Edit scan pose): its pose carries no link
+  // evidence; the report and the scan list say so. Cleared when a registration places the scan.
+  bool manual_pose = false;
 };
 
 struct Project {

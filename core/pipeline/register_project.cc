@@ -279,7 +279,10 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
   for (std::size_t i = 0; i < project.scans.size() && i < result.scans.size(); ++i) {
     io::ProjectScan& ps = project.scans[i];
     ps.registered = result.scans[i].registered;
-    if (ps.registered) ps.world_from_scan = result.scans[i].world_from_scan;
+    if (ps.registered) {
+      ps.world_from_scan = result.scans[i].world_from_scan;
+      ps.manual_pose = false;
+    }
     ps.unregistered_reason = ps.registered ? "" : result.scans[i].reason;
     ps.coarse_world_from_scan.reset();
     if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;

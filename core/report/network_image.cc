@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/report/canvas.h"
-#include "core/report/project_view.h"
+#include "core/io/project_tree.h"
 
 namespace scanreg::report {
 namespace {
@@ -40,7 +40,7 @@ void DrawLink(cv::Mat& image, cv::Point2d a, cv::Point2d b, const io::LinkRecord
   const cv::Scalar color = StatusColor(l.status);
   if (l.loop_check) {
     DrawDashedLine(image, a, b, color, 2, 2, 6);
-  } else if (!IsTreeLink(l)) {
+  } else if (!io::IsTreeLink(l)) {
     DrawDashedLine(image, a, b, color, 1, 9, 6);
   } else {
     cv::line(image, a, b, cv::Scalar(235, 235, 235), 11, cv::LINE_AA);
@@ -129,7 +129,7 @@ cv::Mat DrawScanNetwork(const io::Project& project) {
     for (const io::LinkRecord& l : project.links) {
       const int p = project.FindScan(l.parent), c = project.FindScan(l.child);
       if (p < 0 || c < 0) continue;
-      if (IsTreeLink(l) == (pass == 1)) DrawLink(image, at[p], at[c], l);
+      if (io::IsTreeLink(l) == (pass == 1)) DrawLink(image, at[p], at[c], l);
     }
   }
   const int root = project.root ? project.FindScan(*project.root) : -1;

@@ -13,7 +13,7 @@
 #include "core/report/error_chart.h"
 #include "core/report/html_table.h"
 #include "core/report/network_image.h"
-#include "core/report/project_view.h"
+#include "core/io/project_tree.h"
 
 namespace scanreg::report {
 namespace {
@@ -65,7 +65,7 @@ std::string SummarySection(const io::Project& p) {
   for (const io::LinkRecord& l : p.links) {
     if (l.loop_check) {
       ++checks;
-    } else if (!IsTreeLink(l)) {
+    } else if (!io::IsTreeLink(l)) {
       ++failed;
     } else {
       ++(l.status == io::LinkStatus::kOk ? tree_ok : tree_weak);
@@ -110,7 +110,7 @@ std::string ConfusionSection(const io::Project& p, const std::filesystem::path& 
            "<p>Not available: the project has not been registered since its scans last changed (the matrix is "
            "stored by <code>scanreg-cli register</code>).</p>\n";
   }
-  const std::vector<int> order = ScanOrder(p);
+  const std::vector<int> order = io::OrderedScanIndices(p);
   const int n = static_cast<int>(order.size());
   Eigen::MatrixXi ordered(n, n);
   std::vector<std::string> names;
@@ -141,7 +141,7 @@ std::string LinksSection(const io::Project& p) {
               {"parent", "child", "kind", "method", "matches", "reliable", "RANSAC inliers", "consistent", "RMS (mm)",
                "overlap %", "conflict %", "iterations", "time (s)", "status", "reason"});
   for (const io::LinkRecord& l : p.links) {
-    const std::string kind = l.loop_check ? "loop check" : IsTreeLink(l) ? "tree" : "attempt";
+    const std::string kind = l.loop_check ? "loop check" : io::IsTreeLink(l) ? "tree" : "attempt";
     std::string status = io::LinkStatusName(l.status);
     if (l.user_accepted) status += " (accepted by user)";
     if (l.user_rejected) status += " (rejected by user)";
@@ -168,10 +168,11 @@ std::string PosesSection(const io::Project& p) {
     const HeadingPitchRoll a = HeadingPitchRollFromRotation(s.world_from_scan.linear());
     std::string status = s.registered ? (p.root && *p.root == s.name ? "root" : "registered") : "not registered";
     if (!s.registered && !s.unregistered_reason.empty()) status += ": " + s.unregistered_reason;
+    if (s.registered && s.manual_pose) status = "placed by hand (no link evidence)";
     t.AddRow({Escape(s.name), Escape(status), Fixed(x.x(), 4), Fixed(x.y(), 4), Fixed(x.z(), 4),
               Fixed(a.heading * kDeg, 4), Fixed(a.pitch * kDeg, 4), Fixed(a.roll * kDeg, 4),
               Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan)},
-             s.registered ? "ok" : "failed");
+             !s.registered ? "failed" : s.manual_pose ? "weak" : "ok");
   }
   return html + t.Html();
 }

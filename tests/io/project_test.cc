@@ -20,6 +20,7 @@ Project TwoScanProject(const test::TempDir& dir) {
   a.name = "a";
   a.path = dir / "scans" / "a.ptx";
   a.registered = true;
+  a.manual_pose = true;
   b.name = "b";
   b.path = dir / "scans" / "b.ptx";
   b.world_from_scan.translation() << 500000.123456, 5800000.654321, 12.5;  // UTM-sized, must keep sub-mm
@@ -59,6 +60,8 @@ TEST(ProjectTest, RoundTripKeepsEverythingWithRelativePaths) {
   EXPECT_EQ(q->scans[1].parent_override.value_or(""), "a");
   EXPECT_TRUE(q->scans[0].registered);
   EXPECT_FALSE(q->scans[1].registered);
+  EXPECT_TRUE(q->scans[0].manual_pose);
+  EXPECT_FALSE(q->scans[1].manual_pose);
   ASSERT_EQ(q->links.size(), 1u);
   EXPECT_EQ(q->links[0].status, LinkStatus::kWeak);
   EXPECT_EQ(q->links[0].reason, "only 9 inliers");

@@ -153,7 +153,9 @@ TEST(MergeScans, BoxFromSimulatorIsWatertight) {
     // past the edge (no return) by the scans near it, so no scan gives it a value (counting such
     // lines of sight as free space closes the box but degrades S's two-plane model 0.014 -> 0.046).
     const std::size_t boundary = CountEdges(result->mesh).boundary;
-    if (method == MergeMethod::kMaximumLikelihood) EXPECT_TRUE(IsWatertight(result->mesh)) << boundary;
+    if (method == MergeMethod::kMaximumLikelihood) {
+      EXPECT_TRUE(IsWatertight(result->mesh)) << boundary;
+    }
     std::printf("%s box: %zu boundary edges\n", MergeMethodName(method), boundary);
     // Distance to the box surface (box frame: yaw 0.3 about z).
     const Eigen::Matrix3d box_from_world = Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();

@@ -8,7 +8,7 @@
 #include "core/report/confusion_image.h"
 #include "core/report/error_chart.h"
 #include "core/report/network_image.h"
-#include "core/report/project_view.h"
+#include "core/io/project_tree.h"
 
 namespace scanreg::report {
 namespace {
@@ -104,10 +104,10 @@ TEST(ReportImages, ScanOrderFollowsTheTreeFromTheRoot) {
   p.root = "b";
   p.links = {Link("b", "c", io::LinkStatus::kOk), Link("b", "a", io::LinkStatus::kWeak),
              Link("c", "d", io::LinkStatus::kFailed)};
-  EXPECT_EQ(ScanOrder(p), (std::vector<int>{1, 2, 0, 3}));
-  EXPECT_FALSE(IsTreeLink(p.links[2]));
+  EXPECT_EQ(io::OrderedScanIndices(p), (std::vector<int>{1, 2, 0, 3}));
+  EXPECT_FALSE(io::IsTreeLink(p.links[2]));
   p.links[0].user_rejected = true;
-  EXPECT_EQ(ScanOrder(p), (std::vector<int>{1, 0, 2, 3}));
+  EXPECT_EQ(io::OrderedScanIndices(p), (std::vector<int>{1, 0, 2, 3}));
 }
 
 }  // namespace

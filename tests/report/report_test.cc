@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_edits.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "tests/io/io_test_util.h"
@@ -182,6 +183,24 @@ TEST(Report, UnregisteredProjectGivesAReportThatSaysSo) {
   EXPECT_EQ(Rows(Table(html, "poses-table")).size(), 3u);
   EXPECT_EQ(ImageSources(html), std::vector<std::string>{kNetworkPng});
   ExpectPicture(dir / "report" / kNetworkPng);
+}
+
+TEST(Report, AScanPlacedByHandIsMarkedAsHavingNoLinkEvidence) {
+  test::TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<io::Project> project = pipeline::WriteSimulatedProject(Street(2, 300, 80), dir / "p", progress, cancel);
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  project->root = project->scans[0].name;
+  project->scans[0].registered = true;
+  ASSERT_TRUE(pipeline::SetScanPose(project->scans[1].name, project->scans[1].world_from_scan, false, *project).ok());
+  Expected<std::filesystem::path> index = WriteReport(*project, dir / "report", progress, cancel);
+  ASSERT_TRUE(index.ok()) << index.error().ToString();
+  const auto poses = Rows(Table(test::ReadBytes(*index), "poses-table"));
+  ASSERT_EQ(poses.size(), 3u);
+  EXPECT_EQ(poses[0][1], "root");
+  EXPECT_EQ(poses[1][1], "placed by hand (no link evidence)");
+  EXPECT_NE(poses[2][1].find("not registered"), std::string::npos);
 }
 
 TEST(Report, AFileOrAnUnwritablePlaceIsAClearError) {

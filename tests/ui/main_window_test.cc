@@ -1,5 +1,6 @@
 // Drives the real main window under Xvfb: menus, the 3D view, the demo project loaded and
 // registered on the worker thread, cancel, save.
+#include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QMenuBar>
 #include <QMessageBox>
@@ -11,10 +12,12 @@
 #include <QtTest/QtTest>
 
 #include "core/io/project.h"
+#include "core/io/project_tree.h"
 #include "tests/ui/wait_for_job.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/network_panel.h"
+#include "ui/pose_dialog.h"
 #include "ui/project_panels.h"
 #include "ui/view_3d.h"
 
@@ -130,6 +133,31 @@ class MainWindowTest : public QObject {
     // Undo restores the registration as it was before the override.
     QCOMPARE(window.project().scans[4].registered, registered_before);
     QVERIFY(window.project().scans[4].world_from_scan.matrix() == pose_before);
+
+    // The confusion matrix is shown in scan order: the root first, then as the scans were placed.
+    const std::vector<int> order = scanreg::io::OrderedScanIndices(window.project());
+    QCOMPARE(window.confusionPanel()->horizontalHeaderItem(0)->text(),
+             QString::fromStdString(*window.project().root));
+    for (int i = 0; i < 5; ++i)
+      QCOMPARE(window.confusionPanel()->item(i, 0)->text().toInt(), window.confusion()(order[i], order[0]));
+
+    // Place s05 by hand through the dialog: moved by 1 m in x, marked manual; undo restores it.
+    const Eigen::Isometry3d s05_before = window.project().scans[4].world_from_scan;
+    window.scanList()->setCurrentCell(4, 0);
+    scanreg::ui::PoseDialog* dialog = window.EditSelectedScanPose();
+    QVERIFY(dialog != nullptr);
+    QCOMPARE(dialog->field(0)->value(), std::round(s05_before.translation().x() * 1e4) / 1e4);
+    dialog->field(0)->setValue(dialog->field(0)->value() + 1.0);
+    dialog->accept();
+    const Eigen::Isometry3d s05_after = window.project().scans[4].world_from_scan;
+    QVERIFY(std::abs(s05_after.translation().x() - s05_before.translation().x() - 1.0) < 1e-3);
+    QVERIFY(s05_after.linear().isApprox(s05_before.linear(), 1e-5));  // angles shown to 1e-4 degree
+    QVERIFY(window.project().scans[4].manual_pose);
+    QCOMPARE(window.scanList()->item(4, 3)->text(), QString("manual pose"));
+    window.undoStack()->undo();
+    QVERIFY(window.project().scans[4].world_from_scan.matrix() == s05_before.matrix());
+    QVERIFY(!window.project().scans[4].manual_pose);
+    if (window.jobs()->busy()) QVERIFY(WaitForJob(window, 300000));  // a panorama the selection may have started
 
     // Save and re-read: the registration is in the file.
     const QString path = dir.filePath("saved.scanreg.json");

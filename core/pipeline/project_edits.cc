@@ -1,30 +1,13 @@
-#include "core/pipeline/apply_pair_result.h"
+#include "core/pipeline/project_edits.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
+#include "core/io/project_tree.h"
+
 namespace scanreg::pipeline {
-namespace {
-
-bool IsTreeLink(const io::LinkRecord& l) {
-  return !l.loop_check && !l.user_rejected && l.status != io::LinkStatus::kFailed;
-}
-
-// Scans registered through `root` along the tree links (root included).
-std::vector<int> Subtree(const io::Project& project, int root) {
-  std::vector<int> out{root};
-  for (std::size_t k = 0; k < out.size(); ++k) {
-    const std::string& name = project.scans[out[k]].name;
-    for (const io::LinkRecord& l : project.links) {
-      if (!IsTreeLink(l) || l.parent != name) continue;
-      const int c = project.FindScan(l.child);
-      if (c >= 0 && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
-    }
-  }
-  return out;
-}
-
-}  // namespace
+using io::IsTreeLink;
 
 Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   const int p = project.FindScan(link.parent), c = project.FindScan(link.child);
@@ -42,7 +25,7 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
                                                       "' is not registered; register the project first or run "
                                                       "the pair the other way round");
   }
-  const std::vector<int> moved = project.scans[c].registered ? Subtree(project, c) : std::vector<int>{c};
+  const std::vector<int> moved = project.scans[c].registered ? io::ScansRegisteredThrough(project, c) : std::vector<int>{c};
   if (std::find(moved.begin(), moved.end(), p) != moved.end()) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + link.parent + "' is registered through '" + link.child +
                                                       "'; registering " + link.child +
@@ -67,6 +50,7 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   project.scans[c].world_from_scan = new_pose;
   project.scans[c].registered = true;
   project.scans[c].unregistered_reason.clear();
+  project.scans[c].manual_pose = false;
   if (old_parent != link.parent && project.root != link.child) project.scans[c].parent_override = link.parent;
 
   // The new link replaces the child's tree link and any earlier record of the same pair.
@@ -81,6 +65,36 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   added.user_rejected = false;
   added.user_accepted = link.status == io::LinkStatus::kWeak;
   links.push_back(added);
+  return Status::Ok();
+}
+
+Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents,
+                   io::Project& project) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  const Eigen::Matrix4d m = world_from_scan.matrix();
+  if (!m.allFinite()) {
+    return MakeError(ErrorCode::kInvalidArgument, "the pose of '" + scan + "' has a non-finite number; re-enter it");
+  }
+  const Eigen::Matrix3d r = world_from_scan.linear();
+  if (std::abs(r.determinant() - 1.0) > 1e-6 || !(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-6)) {
+    return MakeError(ErrorCode::kInvalidArgument, "the pose of '" + scan +
+                                                      "' is not a rigid motion (rotation not orthonormal); "
+                                                      "enter angles, or a 4x4 matrix with a rotation block");
+  }
+  io::ProjectScan& ps = project.scans[s];
+  const std::vector<int> moved =
+      move_dependents && ps.registered ? io::ScansRegisteredThrough(project, s) : std::vector<int>{s};
+  const Eigen::Isometry3d delta = ps.registered ? Eigen::Isometry3d(world_from_scan * ps.world_from_scan.inverse())
+                                                : Eigen::Isometry3d::Identity();
+  for (int i : moved) {
+    project.scans[i].world_from_scan = delta * project.scans[i].world_from_scan;
+    project.scans[i].coarse_world_from_scan.reset();
+  }
+  ps.world_from_scan = world_from_scan;
+  ps.registered = true;
+  ps.manual_pose = true;
+  ps.unregistered_reason.clear();
   return Status::Ok();
 }
 

@@ -1,4 +1,4 @@
-#include "core/pipeline/apply_pair_result.h"
+#include "core/pipeline/project_edits.h"
 
 #include <gtest/gtest.h>
 
@@ -112,6 +112,67 @@ TEST(ApplyPairResult, RefusesCyclesFailedLinksAndUnregisteredParents) {
   for (std::size_t i = 0; i < p.scans.size(); ++i)
     EXPECT_TRUE(p.scans[i].world_from_scan.isApprox(before.scans[i].world_from_scan, 0.0));
   EXPECT_EQ(p.links.size(), before.links.size());
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
+
+namespace scanreg::pipeline {
+namespace {
+
+TEST(SetScanPose, MovesTheScanAndItsDependentsAndMarksItManual) {
+  io::Project p = Tree();
+  const io::Project before = p;
+  const Eigen::Isometry3d target = Pose(5.5, 0.3, 0.15);
+  ASSERT_TRUE(SetScanPose("s2", target, /*move_dependents=*/true, p).ok());
+  EXPECT_TRUE(p.scans[1].world_from_scan.isApprox(target, 1e-12));
+  EXPECT_TRUE(p.scans[1].manual_pose);
+  EXPECT_TRUE(p.scans[1].registered);
+  // s3 hangs below s2: it keeps its pose relative to s2; s1, s4 and s5 stay.
+  const Eigen::Isometry3d rel_before = before.scans[1].world_from_scan.inverse() * before.scans[2].world_from_scan;
+  EXPECT_TRUE((p.scans[1].world_from_scan.inverse() * p.scans[2].world_from_scan).isApprox(rel_before, 1e-12));
+  EXPECT_FALSE(p.scans[2].manual_pose);
+  for (int i : {0, 3, 4}) EXPECT_TRUE(p.scans[i].world_from_scan.isApprox(before.scans[i].world_from_scan, 0.0));
+  EXPECT_FALSE(p.scans[1].coarse_world_from_scan.has_value());
+  EXPECT_TRUE(p.scans[0].coarse_world_from_scan.has_value());
+}
+
+TEST(SetScanPose, WithoutDependentsOnlyTheScanMovesAndAnUnregisteredScanBecomesRegistered) {
+  io::Project p = Tree();
+  const io::Project before = p;
+  ASSERT_TRUE(SetScanPose("s2", Pose(6, 0, 0), /*move_dependents=*/false, p).ok());
+  EXPECT_TRUE(p.scans[2].world_from_scan.isApprox(before.scans[2].world_from_scan, 0.0));
+  ASSERT_TRUE(SetScanPose("s5", Pose(2, 2, 1.0), true, p).ok());
+  EXPECT_TRUE(p.scans[4].registered);
+  EXPECT_TRUE(p.scans[4].manual_pose);
+  EXPECT_TRUE(p.scans[4].unregistered_reason.empty());
+  EXPECT_TRUE(p.scans[4].world_from_scan.isApprox(Pose(2, 2, 1.0), 1e-12));
+}
+
+TEST(SetScanPose, RefusesUnknownScansAndNonRigidOrNonFinitePoses) {
+  io::Project p = Tree();
+  const io::Project before = p;
+  EXPECT_FALSE(SetScanPose("nope", Pose(0, 0, 0), true, p).ok());
+  Eigen::Isometry3d scaled = Pose(1, 1, 0);
+  scaled.linear() *= 1.01;
+  Status s = SetScanPose("s2", scaled, true, p);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("not a rigid motion"), std::string::npos) << s.error().message;
+  Eigen::Isometry3d nan = Pose(1, 1, 0);
+  nan.translation().x() = std::nan("");
+  EXPECT_FALSE(SetScanPose("s2", nan, true, p).ok());
+  for (std::size_t i = 0; i < p.scans.size(); ++i) {
+    EXPECT_TRUE(p.scans[i].world_from_scan.isApprox(before.scans[i].world_from_scan, 0.0));
+    EXPECT_FALSE(p.scans[i].manual_pose);
+  }
+}
+
+TEST(ApplyPairResult, ALinkReplacesAManualPose) {
+  io::Project p = Tree();
+  ASSERT_TRUE(SetScanPose("s4", Pose(0, 6.2, -0.3), true, p).ok());
+  ASSERT_TRUE(p.scans[3].manual_pose);
+  ASSERT_TRUE(ApplyPairResult(Link(p, "s1", "s4"), p).ok());
+  EXPECT_FALSE(p.scans[3].manual_pose);
 }
 
 }  // namespace

@@ -1,0 +1,29 @@
+// The user's edits of a registered project that change poses: applying a pair registration the
+// user chose (the GUI pair panel's "use this result") and placing a scan by hand. Both move the
+// scans registered through the edited scan with it, so that their relative poses are kept.
+#pragma once
+
+#include <string>
+
+#include "core/common/expected.h"
+#include "core/io/project.h"
+
+namespace scanreg::pipeline {
+
+// The link becomes the child's tree link and the child, with every scan registered through it,
+// moves by the change of the child's pose.
+// Errors (kInvalidArgument, naming the scans and what to do): unknown scan, a failed link, an
+// unregistered parent, a parent registered through the child (the tree would have a cycle).
+// When the child's tree parent changes, the parent becomes its parent override, so that a later
+// re-registration keeps the user's choice. A weak link is marked accepted.
+Status ApplyPairResult(const io::LinkRecord& link, io::Project& project);
+
+// Places `scan` at `world_from_scan` by hand: it becomes registered with a manual pose (no link
+// evidence; see ProjectScan::manual_pose). With `move_dependents`, the scans registered through it
+// move along (moving the root with its dependents moves the whole registered project, e.g. into
+// a site frame). Errors: unknown scan; non-finite numbers; a rotation that is not rigid
+// (|det − 1| or R·Rᵀ − I off by more than 1e-6).
+Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents,
+                   io::Project& project);
+
+}  // namespace scanreg::pipeline
