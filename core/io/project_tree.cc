@@ -4,9 +4,7 @@
 
 namespace scanreg::io {
 
-bool IsTreeLink(const LinkRecord& l) {
-  return !l.loop_check && l.status != LinkStatus::kFailed && !l.user_rejected;
-}
+bool IsTreeLink(const LinkRecord& l) { return !l.loop_check && l.status != LinkStatus::kFailed && !l.user_rejected; }
 
 std::vector<int> OrderedScanIndices(const Project& project) {
   std::vector<int> order;

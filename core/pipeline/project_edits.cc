@@ -25,7 +25,8 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
                                                       "' is not registered; register the project first or run "
                                                       "the pair the other way round");
   }
-  const std::vector<int> moved = project.scans[c].registered ? io::ScansRegisteredThrough(project, c) : std::vector<int>{c};
+  const std::vector<int> moved =
+      project.scans[c].registered ? io::ScansRegisteredThrough(project, c) : std::vector<int>{c};
   if (std::find(moved.begin(), moved.end(), p) != moved.end()) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + link.parent + "' is registered through '" + link.child +
                                                       "'; registering " + link.child +
@@ -85,8 +86,8 @@ Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_
   io::ProjectScan& ps = project.scans[s];
   const std::vector<int> moved =
       move_dependents && ps.registered ? io::ScansRegisteredThrough(project, s) : std::vector<int>{s};
-  const Eigen::Isometry3d delta = ps.registered ? Eigen::Isometry3d(world_from_scan * ps.world_from_scan.inverse())
-                                                : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d delta =
+      ps.registered ? Eigen::Isometry3d(world_from_scan * ps.world_from_scan.inverse()) : Eigen::Isometry3d::Identity();
   for (int i : moved) {
     project.scans[i].world_from_scan = delta * project.scans[i].world_from_scan;
     project.scans[i].coarse_world_from_scan.reset();

@@ -31,8 +31,10 @@ io::Project Tree() {
     s.name = "s" + std::to_string(i + 1);
     s.world_from_scan = poses[i];
     s.registered = i < 4;
-    if (s.registered) s.coarse_world_from_scan = poses[i];
-    else s.unregistered_reason = "no link";
+    if (s.registered)
+      s.coarse_world_from_scan = poses[i];
+    else
+      s.unregistered_reason = "no link";
     p.scans.push_back(s);
   }
   p.root = "s1";
