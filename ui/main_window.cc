@@ -162,7 +162,7 @@ void MainWindow::CreateDocks() {
 void MainWindow::CreateMenus() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->setObjectName("FileMenu");
-  // "*.ptx *.ply *.pcd" from io::SupportedScanExtensions() (".ptx, .ply, .pcd").
+  // "*.ptx *.e57 *.ply *.pcd" from io::SupportedScanExtensions() (".ptx, .e57, .ply, .pcd").
   const QString scan_filter =
       tr("Scans (%1);;All files (*)").arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
   QAction* create = file->addAction(tr("&New project…"), this, [this, scan_filter] {
