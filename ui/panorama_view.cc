@@ -24,7 +24,11 @@ constexpr double kPairGap = 40.0;  // pixels between the two panoramas of a pair
 class ZoomView : public QGraphicsView {
  public:
   explicit ZoomView(QWidget* parent) : QGraphicsView(parent) {
-    setDragMode(QGraphicsView::ScrollHandDrag);
+    setDragMode(QGraphicsView::ScrollHandDrag);  // panning works with the scroll bars hidden
+    // Hidden scroll bars: fitting on resize cannot make them appear and disappear in a loop (the
+    // hang seen in the network panel).
+    setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    setVerticalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
     setTransformationAnchor(QGraphicsView::AnchorUnderMouse);
     setRenderHint(QPainter::Antialiasing);
     setBackgroundBrush(QColor(28, 30, 34));
