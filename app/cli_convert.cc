@@ -40,7 +40,7 @@ int RunConvert(const std::vector<std::string>& argv) {
 
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
-      {"demo", "the built-in demo: simulate a street project, register it, write the merged mesh", RunDemo},
+      {"demo", "the built-in demo: simulate a street project, register it, write the merged mesh and the report", RunDemo},
       {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
       {"register", "register every scan of a project automatically (W pipeline)", RunRegister},
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},

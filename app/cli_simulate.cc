@@ -88,7 +88,7 @@ int RunSimulate(const std::vector<std::string>& argv) {
 
 int RunDemo(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("demo", "[--out DIR] [options]   simulate a street project, register it and write the merged mesh",
+  auto args = ParseOrHelp("demo", "[--out DIR] [options]   simulate a street project, register it, write the merged mesh and the report",
                           argv, kSimulateOptions, &code);
   if (!args) return code;
   const std::string out = args->Get("out").value_or("scanreg-demo");
@@ -112,8 +112,13 @@ int RunDemo(const std::vector<std::string>& argv) {
   const std::string mesh = (project->file.parent_path() / "merged.ply").string();
   std::printf("\nmerging the registered scans into %s ...\n", mesh.c_str());
   const int merged = RunMerge({project->file.string(), "--method", "tsdf", "--voxel", "0.1", "--max-range", "25", "--out", mesh});
+  if (merged != 0) return merged;
+  // The registration report a surveyor signs off: evidence per link, errors against the truth.
+  const std::string report = (project->file.parent_path() / "report").string();
+  std::printf("\nwriting the registration report into %s ...\n", report.c_str());
+  if (const int reported = RunReport({project->file.string(), "--out", report}); reported != 0) return reported;
   std::printf("\nproject saved: %s\n", project->file.string().c_str());
-  return merged != 0 ? merged : status;
+  return status;
 }
 
 }  // namespace scanreg::cli

@@ -216,6 +216,31 @@ TEST(CliTest, RegisterUpdatesTheProjectAndReportsTheFarStation) {
   EXPECT_NE(bad.output.find("--coarse"), std::string::npos);
 }
 
+TEST(CliTest, DemoRegistersMergesAndReportsASimulatedProject) {
+  test::TempDir dir;
+  RunResult demo = RunCli("demo --stations 3 --size 1500x375 --out " + Quote(dir / "demo"));
+  ASSERT_EQ(demo.status, 0) << demo.output;  // 0: every scan registered (3 would mean one was not)
+  Expected<io::Project> project = io::LoadProject(dir / "demo" / "project.scanreg.json");
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  for (const io::ProjectScan& s : project->scans) {
+    ASSERT_TRUE(s.registered) << s.name;
+    // Against the simulator's truth, relative to the root (the demo's poses start unknown).
+    const io::ProjectScan& root = project->scans[project->FindScan(*project->root)];
+    const Eigen::Isometry3d got = root.world_from_scan.inverse() * s.world_from_scan;
+    const Eigen::Isometry3d truth = root.reference_world_from_scan->inverse() * *s.reference_world_from_scan;
+    EXPECT_LT((got.translation() - truth.translation()).norm(), 0.01) << s.name;
+  }
+  std::ifstream mesh(dir / "demo" / "merged.ply", std::ios::binary);
+  std::string line;
+  long faces = -1;
+  while (std::getline(mesh, line) && line != "end_header")
+    if (line.rfind("element face ", 0) == 0) faces = std::stol(line.substr(13));
+  EXPECT_GT(faces, 1000);
+  const std::string html = test::ReadBytes(dir / "demo" / "report" / "index.html");
+  EXPECT_NE(html.find("id=\"links-table\""), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir / "demo" / "report" / "network.png"));
+}
+
 TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
   test::TempDir dir;
   ASSERT_EQ(RunCli("simulate --stations 2 --size 600x150 --out " + Quote(dir / "p")).status, 0);
