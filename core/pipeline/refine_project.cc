@@ -74,6 +74,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     link.rms_m = e.rms_m;
     link.conflict = e.conflict;
     const LinkThresholds& t = options.thresholds;
+    std::string reason;
     link.status = io::LinkStatus::kOk;
     if (moved > 2 * options.overlap_distance_m) {
       link.status = io::LinkStatus::kFailed;
@@ -81,19 +82,12 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
           "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
           "distance %.1f mm): diverged; correct the start pose or raise --overlap-distance",
           1e3 * moved, 1e3 * options.overlap_distance_m);
-    } else if (e.overlap < t.min_overlap) {
+    } else if (!(reason = SurfaceFailure(t, link)).empty()) {
       link.status = io::LinkStatus::kFailed;
-      link.reason = Format("overlap %.1f %% after refinement is below %.1f %%", 100 * e.overlap, 100 * t.min_overlap);
-    } else if (e.conflict > t.max_conflict) {
-      link.status = io::LinkStatus::kFailed;
-      link.reason = Format("%.1f %% of the points lie in the other scanner's free space (maximum %.1f %%)",
-                           100 * e.conflict, 100 * t.max_conflict);
-    } else if (e.rms_m > t.max_rms_m) {
-      link.status = io::LinkStatus::kFailed;
-      link.reason = Format("RMS %.1f mm over the overlap exceeds %.1f mm", 1000 * e.rms_m, 1000 * t.max_rms_m);
-    } else if (e.overlap < t.weak_overlap) {
+      link.reason = reason;
+    } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
       link.status = io::LinkStatus::kWeak;
-      link.reason = Format("small overlap (%.1f %%)", 100 * e.overlap, 0);
+      link.reason = reason;
     } else if (!fine->converged) {
       link.status = io::LinkStatus::kWeak;
       link.reason = "the fine step stopped at its iteration cap before converging";

@@ -33,33 +33,20 @@ std::string Format(const char* fmt, double a, double b = 0.0) {
 
 // Fills link.status and link.reason from the evidence and the thresholds.
 void Classify(const LinkThresholds& t, io::LinkRecord& link) {
+  std::string reason;
   if (link.consistent < t.min_inliers) {
     link.status = io::LinkStatus::kFailed;
     link.reason = "only " + std::to_string(link.consistent) + " consistent correspondences (minimum " +
                   std::to_string(t.min_inliers) + ")";
-  } else if (link.overlap < t.min_overlap) {
+  } else if (!(reason = SurfaceFailure(t, link)).empty()) {
     link.status = io::LinkStatus::kFailed;
-    link.reason = Format("overlap %.1f %% is below the minimum %.1f %%: the scans do not share a surface",
-                         100 * link.overlap, 100 * t.min_overlap);
-  } else if (link.conflict > t.max_conflict) {
-    link.status = io::LinkStatus::kFailed;
-    link.reason = Format("%.1f %% of the points lie in the other scanner's free space (maximum %.1f %%): wrong pose",
-                         100 * link.conflict, 100 * t.max_conflict);
-  } else if (link.rms_m > t.max_rms_m) {
-    link.status = io::LinkStatus::kFailed;
-    link.reason = Format("RMS %.1f mm over the overlap exceeds %.1f mm", 1000 * link.rms_m, 1000 * t.max_rms_m);
+    link.reason = reason;
   } else if (link.consistent < t.weak_inliers) {
     link.status = io::LinkStatus::kWeak;
     link.reason = "few consistent correspondences (" + std::to_string(link.consistent) + ")";
-  } else if (link.overlap < t.weak_overlap) {
+  } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
     link.status = io::LinkStatus::kWeak;
-    link.reason = Format("small overlap (%.1f %%)", 100 * link.overlap);
-  } else if (link.conflict > t.weak_conflict) {
-    link.status = io::LinkStatus::kWeak;
-    link.reason = Format("%.1f %% of the points conflict with the other scan's free space", 100 * link.conflict);
-  } else if (link.rms_m > t.weak_rms_m) {
-    link.status = io::LinkStatus::kWeak;
-    link.reason = Format("RMS %.1f mm over the overlap is high", 1000 * link.rms_m);
+    link.reason = reason;
   } else {
     link.status = io::LinkStatus::kOk;
     link.reason.clear();
@@ -67,6 +54,30 @@ void Classify(const LinkThresholds& t, io::LinkRecord& link) {
 }
 
 }  // namespace
+
+std::string SurfaceFailure(const LinkThresholds& t, const io::LinkRecord& link) {
+  if (link.overlap < t.min_overlap) {
+    return Format("overlap %.1f %% is below the minimum %.1f %%: the scans do not share a surface", 100 * link.overlap,
+                  100 * t.min_overlap);
+  }
+  if (link.conflict > t.max_conflict) {
+    return Format("%.1f %% of the points lie in the other scanner's free space (maximum %.1f %%): wrong pose",
+                  100 * link.conflict, 100 * t.max_conflict);
+  }
+  if (link.rms_m > t.max_rms_m) {
+    return Format("RMS %.1f mm over the overlap exceeds %.1f mm", 1000 * link.rms_m, 1000 * t.max_rms_m);
+  }
+  return "";
+}
+
+std::string SurfaceWeakness(const LinkThresholds& t, const io::LinkRecord& link) {
+  if (link.overlap < t.weak_overlap) return Format("small overlap (%.1f %%)", 100 * link.overlap);
+  if (link.conflict > t.weak_conflict) {
+    return Format("%.1f %% of the points conflict with the other scan's free space", 100 * link.conflict);
+  }
+  if (link.rms_m > t.weak_rms_m) return Format("RMS %.1f mm over the overlap is high", 1000 * link.rms_m);
+  return "";
+}
 
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
   prepared->scan = &scan;

@@ -41,11 +41,17 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
 // Overlap and RMS (point-to-plane) of the child's samples against the parent's, and free-space
 // conflicts, at a pose: the evidence shared by every method.
 struct AlignmentEvidence {
-  double overlap = 0.0;  // fraction of child samples with a parent sample within max_distance_m
-  double rms_m = 0.0;    // RMS distance of those samples
-  double conflict = 0.0; // free-space violations, the larger of both directions (visibility.h)
+  double overlap = 0.0;   // fraction of child samples with a parent sample within max_distance_m
+  double rms_m = 0.0;     // RMS distance of those samples
+  double conflict = 0.0;  // free-space violations, the larger of both directions (visibility.h)
 };
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m);
+
+// The surface checks of a link's evidence (link.overlap, link.conflict, link.rms_m) against the
+// thresholds, shared by every way of registering a pair: the reason the link fails, or is weak;
+// empty when the surfaces give no cause.
+std::string SurfaceFailure(const LinkThresholds& t, const io::LinkRecord& link);
+std::string SurfaceWeakness(const LinkThresholds& t, const io::LinkRecord& link);
 
 }  // namespace scanreg::pipeline
