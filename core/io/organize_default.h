@@ -1,5 +1,5 @@
-// Organizing an unorganized cloud when the file gives no grid: the angular step is chosen from
-// the point density, so that most points keep a cell of their own.
+// Organizing an unorganized cloud when the file gives no grid: the grid follows the data's own
+// angular resolution, so that (nearly) every point keeps a cell of its own.
 #pragma once
 
 #include <Eigen/Core>
@@ -7,18 +7,34 @@
 #include <vector>
 
 #include "core/common/expected.h"
+#include "core/geometry/organize.h"
 #include "core/geometry/scan.h"
 
 namespace scanreg::io {
 
-// Points are in the scanner frame (scanner at the origin). The step is the mean angular spacing
-// of the points over the occupied part of the (azimuth, elevation) plane, divided by
-// kOversampling. `source` names the file in error messages.
+// Points are in the scanner frame (scanner at the origin). Candidate grids are compared by the
+// number of points they keep, counting exact repeats of a point once:
+//  1. Rings: when the elevations form well-separated clusters (the lasers of a multi-beam lidar,
+//     the lines of a TLS scan), one row per cluster at its median elevation, and columns at the
+//     median azimuth step between neighbouring points of a ring (or a few times finer when that
+//     keeps clearly more points). Taken when it keeps >= 99 %.
+//  2. Otherwise uniform grids finer than the point spacing (isotropic, and anisotropic from the
+//     azimuth step within elevation bands), coarsest first: the first that keeps >= 99.5 %, else
+//     the one that keeps most.
+// A point whose cell is taken may move to a free cell of its row nearby (same azimuth order). No
+// grid has more than 4 cells per point; columns cover only the data's azimuth range when it is
+// under half a turn. Points left out are reported by LogWarning with their count. `source` names
+// the file (or file and scan) in messages. Error when the cloud has no usable point, or when no
+// grid within the cell budget keeps half of its points (not a scan seen from the origin).
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                                       std::string name, const std::string& source);
 
-// Exposed for tests: the angular step (radians) OrganizeCloudByDensity would use; 0 when the
-// cloud has no usable point.
+// Exposed for tests: the ring grid of step 1 at the data's own azimuth step; row_elevations_rad
+// is empty when the elevations do not form rings.
+OrganizeOptions RingGridOptions(const std::vector<Eigen::Vector3f>& points);
+
+// Exposed for tests: the mean angular spacing (radians) of the points over the occupied part of
+// the (azimuth, elevation) plane; 0 when the cloud has no usable point.
 double DensityAngularStep(const std::vector<Eigen::Vector3f>& points);
 
 }  // namespace scanreg::io
