@@ -10,13 +10,15 @@ namespace scanreg::cli {
 int RunExportClouds(const std::vector<std::string>& argv) {
   int code = 0;
   auto args = ParseOrHelp(
-      "export-clouds", "PROJECT.scanreg.json --out DIR [--format ptx|e57|ply] [--apply-poses]", argv,
+      "export-clouds", "PROJECT.scanreg.json --out DIR [--format ptx|e57|ply|las] [--apply-poses]", argv,
       {{"out", true, false, "DIR      output folder: one file per registered scan, DIR/<scan>.<format>"},
-       {"format", true, false, "ptx|e57|ply   file format (default ptx)"},
+       {"format", true, false,
+        "ptx|e57|ply|las   file format (default ptx); ply and las always hold world\n"
+        "                     coordinates in double precision (las: 0.1 mm, LAS 1.4 format 6)"},
        {"apply-poses", false, false,
-        "       write world coordinates (pose applied to the points, identity pose in the header);\n"
+        "       ptx, e57: write world coordinates (pose applied to the points, identity pose in the header);\n"
         "                     default: points in the scanner frame, the registered pose kept in the header (lossless;\n"
-        "                     applied world coordinates are floats: 1 mm steps 10 km from the origin)"}},
+        "                     applied world coordinates are floats: a warning names each scan rounded by > 0.1 mm)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -45,7 +47,9 @@ int RunExportClouds(const std::vector<std::string>& argv) {
     }
   }
   std::printf("exported %d of %zu scans (%s, poses %s)\n", written, exported->size(), options.format.c_str(),
-              options.apply_poses ? "applied to the points" : "kept in the header");
+              pipeline::WorldFormat(options.format) ? "world coordinates, double"
+              : options.apply_poses                 ? "applied to the points"
+                                                    : "kept in the header");
   return 0;
 }
 

@@ -20,7 +20,7 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
        {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"},
-       {"points", true, false, "FILE.ply also write the merged point cloud (the surface's vertices)"}},
+       {"points", true, false, "FILE.ply|FILE.las   also write the merged point cloud (the surface's vertices)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -67,7 +67,12 @@ int RunMerge(const std::vector<std::string>& argv) {
   for (const io::ProjectScan& s : project->scans) use.push_back(s.registered), registered += s.registered;
   if (registered == 0 && !project->scans.empty()) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: no scan of " + project->file.string() +
-                                                           " is registered; run `scanreg-cli register` first"));
+                                                           " is registered or has an imported pose; run "
+                                                           "`scanreg-cli register` first"));
+  }
+  if (registered < project->scans.size()) {
+    std::fprintf(stderr, "merge: %zu of %zu scans are not registered and are left out\n",
+                 project->scans.size() - registered, project->scans.size());
   }
   SubProgress merge_progress(progress, 0.1, 1.0);
   auto result = pipeline::MergeScans(*scans, use, options, merge_progress, cancel);
@@ -77,10 +82,9 @@ int RunMerge(const std::vector<std::string>& argv) {
     if (Status s = pipeline::WritePoints(*points, result->mesh); !s) return Fail(s.error());
     std::printf("merged point cloud: %zu points -> %s\n", result->mesh.vertices.size(), points->c_str());
   }
-  std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n",
-              result->scans, scans->size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml",
-              options.voxel_m, result->mesh.triangles.size(), result->mesh.vertices.size(), result->seconds,
-              out->c_str());
+  std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
+              scans->size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,
+              result->mesh.triangles.size(), result->mesh.vertices.size(), result->seconds, out->c_str());
   return 0;
 }
 

@@ -15,7 +15,9 @@ namespace scanreg::cli {
 int RunNew(const std::vector<std::string>& argv) {
   int code = 0;
   auto args = ParseOrHelp("new", "PROJECT.scanreg.json SCAN... [--poses FILE] [--reference-poses FILE]", argv,
-                          {{"poses", true, false, "FILE     initial poses (Stanford .conf or poses .json)"},
+                          {{"poses", true, false,
+                            "FILE     imported poses: Stanford .conf, or what export-poses writes (.json, .csv,\n"
+                            "                     a 4x4 <scan>.txt or a folder of them); the scans are 'imported'"},
                            {"reference-poses", true, false, "FILE   reference (ground-truth) poses, same formats"}},
                           &code);
   if (!args) return code;
@@ -49,8 +51,8 @@ int RunInfo(const std::vector<std::string>& argv) {
   if (!scans) return Fail(scans.error());
   std::printf("project %s\n%zu scans, %zu links, root %s\n\n", project->file.string().c_str(), scans->size(),
               project->links.size(), project->root ? project->root->c_str() : "(automatic)");
-  std::printf("%-12s %-24s %11s %8s %11s  %-10s %10s %10s %10s %8s %s\n", "scan", "file", "size", "valid %",
-              "points", "status", "x (m)", "y (m)", "z (m)", "yaw (°)", "reference error");
+  std::printf("%-12s %-24s %11s %8s %11s  %-12s %10s %10s %10s %8s %s\n", "scan", "file", "size", "valid %", "points",
+              "status", "x (m)", "y (m)", "z (m)", "yaw (°)", "reference error");
   for (std::size_t i = 0; i < scans->size(); ++i) {
     const Scan& s = (*scans)[i];
     const io::ProjectScan& ps = project->scans[i];
@@ -67,10 +69,10 @@ int RunInfo(const std::vector<std::string>& argv) {
       reference = "(has reference)";
     }
     const std::string size = std::to_string(s.cols) + "x" + std::to_string(s.rows);
-    std::printf("%-12s %-24s %11s %8.1f %11zu  %-10s %10.3f %10.3f %10.3f %8.2f %s\n", s.name.c_str(),
+    std::printf("%-12s %-24s %11s %8.1f %11zu  %-12s %10.3f %10.3f %10.3f %8.2f %s\n", s.name.c_str(),
                 ps.path.filename().string().c_str(), size.c_str(), s.size() ? 100.0 * valid / s.size() : 0.0, valid,
-                ps.registered ? "registered" : "unregistered", t.translation().x(), t.translation().y(),
-                t.translation().z(), yaw, reference.c_str());
+                io::PoseStateName(io::ScanPoseState(ps)), t.translation().x(), t.translation().y(), t.translation().z(),
+                yaw, reference.c_str());
   }
   return 0;
 }
@@ -81,9 +83,13 @@ int RunExportPoses(const std::vector<std::string>& argv) {
       "export-poses", "PROJECT.scanreg.json --format json|txt|csv --out PATH", argv,
       {{"format", true, false,
         "json|txt|csv   json: one file of row-major 4x4 world_from_scan; txt: one CloudCompare 4x4 file per scan;\n"
-        "                     csv: scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg (scanner position in the world;\n"
+        "                     csv: scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,status (scanner position in the "
+        "world;\n"
         "                     R = Rz(heading) Ry(pitch) Rx(roll), heading counter-clockwise from world +x)"},
-       {"out", true, false, "PATH     output file (json, csv) or folder (txt)"}},
+       {"out", true, false, "PATH     output file (json, csv) or folder (txt)"},
+       {"include-unregistered", false, false,
+        "       also list the scans that are not registered, with status 'unregistered' and no pose (json, csv);\n"
+        "                     by default they are left out (and named on stderr)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -92,21 +98,34 @@ int RunExportPoses(const std::vector<std::string>& argv) {
   const std::string format = args->Get("format").value_or("json");
   const auto out = args->Get("out");
   if (format != "json" && format != "txt" && format != "csv") {
-    return Fail(
-        MakeError(ErrorCode::kInvalidArgument, "export-poses: --format must be json, txt or csv, not '" + format + "'"));
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "export-poses: --format must be json, txt or csv, not '" + format + "'"));
   }
   if (!out) return Fail(MakeError(ErrorCode::kInvalidArgument, "export-poses: --out PATH is required"));
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
+  const bool include_unregistered = args->Has("include-unregistered");
+  std::vector<io::NamedPose> poses;
+  std::string left_out;
   int unregistered = 0;
-  for (const io::ProjectScan& s : project->scans) unregistered += !s.registered;
+  for (const io::ProjectScan& s : project->scans) {
+    const io::PoseState state = io::ScanPoseState(s);
+    if (state == io::PoseState::kUnregistered) {
+      left_out += (unregistered++ ? ", " : "") + s.name;
+      if (!include_unregistered || format == "txt") continue;
+    }
+    poses.push_back({s.name, s.world_from_scan, io::PoseStateName(state)});
+  }
   if (unregistered > 0) {
-    std::printf("note: %d of %zu scans are not registered; their poses are the initial ones\n", unregistered,
-                project->scans.size());
+    const bool flagged = include_unregistered && format != "txt";
+    std::fprintf(stderr, "export-poses: %d of %zu scans are not registered (%s): %s\n", unregistered,
+                 project->scans.size(), left_out.c_str(),
+                 flagged ? "written with status 'unregistered' and no pose"
+                 : format == "txt"
+                     ? "left out; a matrix file cannot say a scan is unregistered"
+                     : "left out; --include-unregistered lists them with status 'unregistered' and no pose");
   }
   if (format == "json" || format == "csv") {
-    std::vector<io::NamedPose> poses;
-    for (const io::ProjectScan& s : project->scans) poses.push_back({s.name, s.world_from_scan});
     Status written = format == "json" ? io::WritePosesJson(*out, poses) : io::WritePosesCsv(*out, poses);
     if (!written) return Fail(written.error());
     std::printf("wrote %zu poses to %s\n", poses.size(), out->c_str());
@@ -114,13 +133,14 @@ int RunExportPoses(const std::vector<std::string>& argv) {
   }
   std::error_code ec;
   std::filesystem::create_directories(*out, ec);
-  if (ec) return Fail(MakeError(ErrorCode::kIoError, "export-poses: cannot create folder '" + *out + "': " + ec.message()));
-  for (const io::ProjectScan& s : project->scans) {
-    if (Status st = io::WriteMatrixTxt(std::filesystem::path(*out) / (s.name + ".txt"), s.world_from_scan); !st) {
+  if (ec)
+    return Fail(MakeError(ErrorCode::kIoError, "export-poses: cannot create folder '" + *out + "': " + ec.message()));
+  for (const io::NamedPose& p : poses) {
+    if (Status st = io::WriteMatrixTxt(std::filesystem::path(*out) / (p.scan + ".txt"), p.world_from_scan); !st) {
       return Fail(st.error());
     }
   }
-  std::printf("wrote %zu matrix files to %s\n", project->scans.size(), out->c_str());
+  std::printf("wrote %zu matrix files to %s\n", poses.size(), out->c_str());
   return 0;
 }
 

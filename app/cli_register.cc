@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
@@ -9,6 +10,7 @@
 #include "core/io/project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
+#include "core/pipeline/register_settings.h"
 
 namespace scanreg::cli {
 namespace {
@@ -36,9 +38,10 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   std::printf("\n%-8s %-8s %-14s %7s %8s %8s %10s %8s %9s %6s %7s  %-6s %s\n", "parent", "child", "method", "matches",
               "reliable", "inliers", "consistent", "RMS mm", "overlap %", "iter", "time s", "status", "reason");
   for (const io::LinkRecord& l : r.links) {
-    std::printf("%-8s %-8s %-14s %7d %8d %8d %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(), l.child.c_str(),
-                (l.loop_check ? "check:" + l.method : l.method).c_str(), l.matches, l.reliable, l.ransac_inliers, l.consistent, l.rms_m * 1000,
-                l.overlap * 100, l.conflict * 100, l.iterations, l.seconds, io::LinkStatusName(l.status), l.reason.c_str());
+    std::printf("%-8s %-8s %-14s %7d %8d %8d %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(),
+                l.child.c_str(), (l.loop_check ? "check:" + l.method : l.method).c_str(), l.matches, l.reliable,
+                l.ransac_inliers, l.consistent, l.rms_m * 1000, l.overlap * 100, l.conflict * 100, l.iterations,
+                l.seconds, io::LinkStatusName(l.status), l.reason.c_str());
   }
   bool any_reference = false;
   for (const auto& e : errors) any_reference |= e.available;
@@ -47,8 +50,8 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   std::printf("\n");
   for (std::size_t i = 0; i < r.scans.size(); ++i) {
     const auto& s = r.scans[i];
-    std::printf("%-8s %-13s", s.name.c_str(), s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered")
-                                                           : "UNREGISTERED");
+    std::printf("%-8s %-13s", s.name.c_str(),
+                s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered") : "UNREGISTERED");
     if (any_reference && errors[i].available) {
       if (errors[i].has_coarse) {
         std::printf(" %12.1f %12.4f", errors[i].coarse_position_m * 1000, errors[i].coarse_angle_rad * kDeg);
@@ -84,11 +87,21 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
   }
   json links = json::array();
   for (const io::LinkRecord& l : r.links) {
-    links.push_back({{"parent", l.parent}, {"child", l.child}, {"method", l.method},
-                     {"status", io::LinkStatusName(l.status)}, {"reason", l.reason}, {"matches", l.matches},
-                     {"reliable", l.reliable}, {"ransac_inliers", l.ransac_inliers}, {"consistent", l.consistent},
-                     {"rms_m", l.rms_m}, {"overlap", l.overlap}, {"conflict", l.conflict}, {"iterations", l.iterations},
-                     {"seconds", l.seconds}, {"loop_check", l.loop_check}});
+    links.push_back({{"parent", l.parent},
+                     {"child", l.child},
+                     {"method", l.method},
+                     {"status", io::LinkStatusName(l.status)},
+                     {"reason", l.reason},
+                     {"matches", l.matches},
+                     {"reliable", l.reliable},
+                     {"ransac_inliers", l.ransac_inliers},
+                     {"consistent", l.consistent},
+                     {"rms_m", l.rms_m},
+                     {"overlap", l.overlap},
+                     {"conflict", l.conflict},
+                     {"iterations", l.iterations},
+                     {"seconds", l.seconds},
+                     {"loop_check", l.loop_check}});
   }
   json out_scans = json::array();
   for (std::size_t i = 0; i < r.scans.size(); ++i) {
@@ -111,12 +124,16 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
   }
   std::vector<std::string> names;
   for (const Scan& s : scans) names.push_back(s.name);
-  return json{{"scans", out_scans},     {"names", names},
-              {"root", scans[r.root].name}, {"confusion", confusion},
-              {"links", links},         {"seconds", {{"features", r.seconds_features},
-                                                      {"matching", r.seconds_matching},
-                                                      {"pairs", r.seconds_pairs},
-                                                      {"total", r.seconds_total}}}};
+  return json{{"scans", out_scans},
+              {"names", names},
+              {"root", scans[r.root].name},
+              {"confusion", confusion},
+              {"links", links},
+              {"seconds",
+               {{"features", r.seconds_features},
+                {"matching", r.seconds_matching},
+                {"pairs", r.seconds_pairs},
+                {"total", r.seconds_total}}}};
 }
 
 }  // namespace
@@ -148,75 +165,88 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
 int RunRegister(const std::vector<std::string>& argv) {
   int code = 0;
   auto args = ParseOrHelp(
-      "register", "PROJECT.scanreg.json [options]   registers every scan and saves the project", argv,
+      "register",
+      "PROJECT.scanreg.json [options]   registers every scan and saves the project; options default to the "
+      "project's saved settings",
+      argv,
       {{"root", true, false, "NAME     root scan of the scan order (default: tail of the heaviest edge)"},
        {"parent", true, true, "SCAN=PARENT   register SCAN to PARENT (repeatable; saved in the project)"},
-       {"coarse", true, false, "epnp|3d|none   coarse method: EPnP on the virtual plane (W), 3D-3D RANSAC, or none: "
-                               "refine from the current poses, linking the scans that overlap there"},
-       {"fine", true, false, "keypoints|dense|em|projective-icp   fine method: keypoint ICP (W), dense point-to-plane "
-                             "ICP, S's EM on the range images, or projective ICP (S's [15])"},
-       {"overlap-distance", true, false, "METRES   a child point this near the parent's surface overlaps (default "
-                                         "0.10; with --coarse none a few times the current pose error)"},
+       {"coarse", true, false,
+        "epnp|3d|none   coarse method: EPnP on the virtual plane (W), 3D-3D RANSAC (default), or "
+        "none: refine from the current poses, linking the scans that overlap there (the "
+        "default when every scan has an imported pose)"},
+       {"fine", true, false,
+        "keypoints|dense|em|projective-icp   fine method: keypoint ICP (W), dense point-to-plane "
+        "ICP (default), S's EM on the range images, or projective ICP (S's [15])"},
+       {"overlap-distance", true, false,
+        "METRES   a child point this near the parent's surface overlaps (default "
+        "0.10; with --coarse none a few times the current pose error)"},
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
        {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
-       {"global", false, false, "       global registration: pose graph over every link, all links loop-checked (default)"},
+       {"global", false, false,
+        "       global registration: pose graph over every link, all links loop-checked (default)"},
        {"no-global", false, false, "       no global registration: chain the pairwise links along the tree only"},
+       {"keep-imported", false, false,
+        "       keep the imported poses (from --poses or the scan files' headers) fixed "
+        "and place the other scans relative to them"},
+       {"refine-imported", false, false, "       re-estimate imported poses (the default)"},
        {"json", false, false, "       print the result as JSON"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give exactly one project file"));
   }
-  pipeline::RegisterOptions options;
-  const std::string coarse = args->Get("coarse").value_or("3d");
-  const std::string fine = args->Get("fine").value_or("dense");
-  if (coarse != "epnp" && coarse != "3d" && coarse != "none") {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: --coarse must be epnp, 3d or none, not '" + coarse + "'"));
+  for (const auto& [yes, no] :
+       {std::make_pair("global", "no-global"), std::make_pair("keep-imported", "refine-imported")}) {
+    if (args->Has(yes) && args->Has(no)) {
+      return Fail(MakeError(ErrorCode::kInvalidArgument,
+                            std::string("register: give --") + yes + " or --" + no + ", not both"));
+    }
   }
-  options.coarse.method = coarse == "epnp" ? CoarseMethod::kEpnp : CoarseMethod::k3d;
-  options.from_current_poses = coarse == "none";
-  bool fine_known = false;
-  for (pipeline::FineMethod m : {pipeline::FineMethod::kKeypoints, pipeline::FineMethod::kDense, pipeline::FineMethod::kEm,
-                                 pipeline::FineMethod::kProjectiveIcp}) {
-    if (fine == pipeline::FineMethodName(m)) options.fine = m, fine_known = true;
-  }
-  if (!fine_known) {
-    return Fail(MakeError(ErrorCode::kInvalidArgument,
-                          "register: --fine must be keypoints, dense, em or projective-icp, not '" + fine + "'"));
-  }
-  auto overlap_distance = args->GetDouble("overlap-distance", options.overlap_distance_m, 1e-6, 100.0);
-  if (!overlap_distance) return Fail(overlap_distance.error());
-  options.overlap_distance_m = *overlap_distance;
-  auto ratio = args->GetDouble("ratio", 0.66, 0.05, 1.0);
-  if (!ratio) return Fail(ratio.error());
-  options.match.ratio = *ratio;
-  auto noise = args->GetDouble("noise", 0.012, 0.0, 0.5);
-  if (!noise) return Fail(noise.error());
-  options.range_sigma_m = *noise;
-  if (auto root = args->Get("root")) options.root = *root;
-  if (args->Has("global") && args->Has("no-global")) {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give --global or --no-global, not both"));
-  }
-  options.global = !args->Has("no-global");
-
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
+  // The project's saved settings, then the flags given now (saved for the next run).
+  auto options = pipeline::ProjectRegisterOptions(*project);
+  if (!options) return Fail(MakeError(options.error().code, project->file.string() + ": " + options.error().message));
+  for (const pipeline::RegisterSetting& setting : pipeline::RegisterSettings()) {
+    std::optional<std::string> value;
+    if (setting.boolean) {
+      if (args->Has(setting.flag)) value = "true";
+      if (args->Has(std::string("no-") + setting.flag)) value = "false";
+      if (std::string(setting.flag) == "keep-imported" && args->Has("refine-imported")) value = "false";
+    } else {
+      value = args->Get(setting.flag);
+    }
+    if (!value) continue;
+    if (Status s = pipeline::ApplyRegisterSetting(setting, *value, &*options); !s) {
+      return Fail(MakeError(s.error().code, "register: --" + std::string(setting.flag) + ": " + s.error().message));
+    }
+  }
+  if (auto root = args->Get("root")) options->root = *root;
   for (const std::string& p : args->GetAll("parent")) {
     const auto eq = p.find('=');
     const int child = eq == std::string::npos ? -1 : project->FindScan(p.substr(0, eq));
     const int parent = eq == std::string::npos ? -1 : project->FindScan(p.substr(eq + 1));
     if (child < 0 || parent < 0 || child == parent) {
-      return Fail(MakeError(ErrorCode::kInvalidArgument,
-                            "register: --parent '" + p + "' must be SCAN=PARENT with two different scans of the project"));
+      return Fail(
+          MakeError(ErrorCode::kInvalidArgument,
+                    "register: --parent '" + p + "' must be SCAN=PARENT with two different scans of the project"));
     }
     project->scans[child].parent_override = project->scans[parent].name;
   }
-  if (!args->Has("no-cache")) options.feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
-  project->settings["register.coarse"] = coarse;
-  project->settings["register.fine"] = fine;
-  project->settings["register.ratio"] = std::to_string(options.match.ratio);
-  return RegisterAndReport(*project, options, args->Has("json"));
+  if (!args->Has("no-cache")) options->feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
+  int imported = 0;
+  for (const io::ProjectScan& s : project->scans) imported += s.registered && s.imported_pose;
+  if (imported > 0) {
+    std::fprintf(stderr, "register: %d scan(s) have imported poses: %s\n", imported,
+                 options->keep_imported ? "kept fixed; the other scans are placed relative to them (--keep-imported)"
+                 : options->from_current_poses
+                     ? "refined from where they are (--coarse none; --keep-imported keeps them fixed)"
+                     : "re-estimated from the scans' features (--keep-imported keeps them fixed)");
+  }
+  pipeline::StoreRegisterSettings(*options, &project->settings);
+  return RegisterAndReport(*project, *options, args->Has("json"));
 }
 
 }  // namespace scanreg::cli

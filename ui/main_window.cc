@@ -1,5 +1,6 @@
 #include "ui/main_window.h"
 
+#include <QVTKOpenGLNativeWidget.h>
 #include <QAction>
 #include <QApplication>
 #include <QCloseEvent>
@@ -15,15 +16,15 @@
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QUndoStack>
-#include <QVTKOpenGLNativeWidget.h>
 
 #include "core/common/log.h"
 #include "core/io/project_tree.h"
-#include "core/pipeline/project_edits.h"
+#include "core/io/scan_file.h"
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_edits.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
-#include "core/io/scan_file.h"
+#include "core/pipeline/register_settings.h"
 #include "core/report/report.h"
 #include "ui/app_settings.h"
 #include "ui/job_runner.h"
@@ -32,6 +33,7 @@
 #include "ui/pair_inspector.h"
 #include "ui/pose_dialog.h"
 #include "ui/project_panels.h"
+#include "ui/register_settings_dialog.h"
 #include "ui/scan_cloud_actors.h"
 #include "ui/scan_scene.h"
 #include "ui/view_3d.h"
@@ -120,7 +122,8 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   SetLogHandler([log](LogLevel level, const std::string& message) {
     const QString lvl = level == LogLevel::kError ? "error" : level == LogLevel::kWarning ? "warning" : "info";
     const QString text = QString::fromStdString(message);
-    QMetaObject::invokeMethod(log, [log, lvl, text] { log->Append(lvl, text); }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+        log, [log, lvl, text] { log->Append(lvl, text); }, Qt::QueuedConnection);
   });
 
   statusBar()->showMessage(tr("No project open."));
@@ -200,11 +203,12 @@ void MainWindow::CreateMenus() {
     RememberDir(files.first());
     AddScans(files);
   });
-  QAction* save = file->addAction(tr("&Save project"), this, [this] { SaveProject(QString::fromStdString(project_.file.string())); });
+  QAction* save = file->addAction(tr("&Save project"), this,
+                                  [this] { SaveProject(QString::fromStdString(project_.file.string())); });
   save->setShortcut(QKeySequence::Save);
   QAction* save_as = file->addAction(tr("Save project &as…"), this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, tr("Save project as"), QString(),
-                                                      tr("scanreg projects (*.scanreg.json)"));
+    const QString path =
+        QFileDialog::getSaveFileName(this, tr("Save project as"), QString(), tr("scanreg projects (*.scanreg.json)"));
     if (!path.isEmpty()) SaveProject(path);
   });
   QAction* report = file->addAction(tr("Export &report…"), this, [this] {
@@ -229,7 +233,8 @@ void MainWindow::CreateMenus() {
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
   run->setShortcut(Qt::CTRL | Qt::Key_R);
   QAction* edit_pose = reg->addAction(tr("Edit scan &pose…"), this, [this] { EditSelectedScanPose(); });
-  project_actions_ = {save, save_as, run, add, report, edit_pose};
+  QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
+  project_actions_ = {save, save_as, run, add, report, edit_pose, settings};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
@@ -265,10 +270,10 @@ bool MainWindow::OpenProject(const QString& path) {
     ShowError(tr("Cannot open project"), QString::fromStdString(project.error().message));
     return false;
   }
-  return jobs_->Start(tr("Loading %1").arg(path), [p = std::move(*project)](ProgressSink& progress,
-                                                                             const CancelToken& cancel) {
-    return LoadJob(p, progress, cancel);
-  });
+  return jobs_->Start(tr("Loading %1").arg(path),
+                      [p = std::move(*project)](ProgressSink& progress, const CancelToken& cancel) {
+                        return LoadJob(p, progress, cancel);
+                      });
 }
 
 bool MainWindow::OpenDemoProject(const QString& dir) {
@@ -290,6 +295,7 @@ bool MainWindow::RegisterProject() {
   const pipeline::RegisterOptions options = RegistrationOptions();
   return jobs_->Start(tr("Registering"), [project = project_, scans = scans_, options](
                                              ProgressSink& progress, const CancelToken& cancel) mutable {
+    pipeline::StoreRegisterSettings(options, &project.settings);  // what this run used, as the CLI saves it
     Expected<pipeline::ProjectRegistration> r =
         pipeline::RegisterProjectScans(project, scans, options, progress, cancel);
     if (!r) return Expected<std::any>(r.error());
@@ -317,8 +323,8 @@ void MainWindow::SetParentOverride(const QString& child, const QString& parent) 
   } else {
     after.scans[c].parent_override = parent.toStdString();
   }
-  const QString text = parent.isEmpty() ? tr("clear the parent of %1").arg(child)
-                                        : tr("register %1 to %2").arg(child, parent);
+  const QString text =
+      parent.isEmpty() ? tr("clear the parent of %1").arg(child) : tr("register %1 to %2").arg(child, parent);
   undo_->push(new EditCommand(this, text, project_, std::move(after), true));
 }
 
@@ -332,16 +338,36 @@ void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bo
     found = true;
   }
   if (!found) return;
-  const QString text = reject ? tr("reject %1 → %2").arg(child, parent)
-                              : accept ? tr("accept %1 → %2").arg(child, parent)
-                                       : tr("clear the decision on %1 → %2").arg(child, parent);
+  const QString text = reject   ? tr("reject %1 → %2").arg(child, parent)
+                       : accept ? tr("accept %1 → %2").arg(child, parent)
+                                : tr("clear the decision on %1 → %2").arg(child, parent);
   undo_->push(new EditCommand(this, text, project_, std::move(after), reject));
 }
 
 pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
-  pipeline::RegisterOptions options;
+  Expected<pipeline::RegisterOptions> saved = pipeline::ProjectRegisterOptions(project_);
+  pipeline::RegisterOptions options = saved ? *saved : pipeline::RegisterOptions();
+  if (!saved) LogWarning(saved.error().message + "; the defaults are used (Registration → Settings… sets them)");
   options.feature_cache_dir = project_.file.parent_path() / ".scanreg-cache";
   return options;
+}
+
+bool MainWindow::SetRegisterOptions(const pipeline::RegisterOptions& options) {
+  io::Project after = project_;
+  pipeline::StoreRegisterSettings(options, &after.settings);
+  if (after.settings == project_.settings) return false;
+  undo_->push(new EditCommand(this, tr("change the registration settings"), project_, std::move(after), false));
+  return true;
+}
+
+RegisterSettingsDialog* MainWindow::EditRegisterSettings() {
+  auto* dialog = new RegisterSettingsDialog(RegistrationOptions(), this);
+  dialog->setAttribute(Qt::WA_DeleteOnClose);
+  connect(dialog, &QDialog::accepted, this, [this, dialog] {
+    if (auto options = dialog->Options()) SetRegisterOptions(*options);
+  });
+  dialog->open();
+  return dialog;
 }
 
 bool MainWindow::SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents) {
@@ -358,7 +384,8 @@ PoseDialog* MainWindow::EditSelectedScanPose() {
   const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
   const int s = item ? project_.FindScan(item->text().toStdString()) : -1;
   if (s < 0) {
-    ShowError(tr("Edit scan pose"), tr("Select a scan in the scan list first, then choose Registration → Edit scan pose."));
+    ShowError(tr("Edit scan pose"),
+              tr("Select a scan in the scan list first, then choose Registration → Edit scan pose."));
     return nullptr;
   }
   const QString name = item->text();
@@ -482,9 +509,8 @@ bool MainWindow::MaybeSaveChanges() {
 void MainWindow::FillRecentMenu(QMenu* menu) {
   const QStringList missing = RemoveMissingRecentProjects();
   if (!missing.isEmpty()) {
-    statusBar()->showMessage(tr("Removed from the recent projects (the files no longer exist): %1")
-                                 .arg(missing.join(", ")),
-                             10000);
+    statusBar()->showMessage(
+        tr("Removed from the recent projects (the files no longer exist): %1").arg(missing.join(", ")), 10000);
     LogWarning("removed from the recent projects, the files no longer exist: " + missing.join(", ").toStdString());
   }
   menu->clear();
@@ -517,23 +543,23 @@ bool MainWindow::AddScans(const QStringList& scan_files) {
   }
   std::vector<std::filesystem::path> files;
   for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start(tr("Adding scans"), [files, project = project_](ProgressSink& progress,
-                                                                      const CancelToken& cancel) mutable {
-    Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
-    if (!scans) return Expected<std::any>(scans.error());
-    return Expected<std::any>(std::any(AddedScans{std::move(project), std::move(*scans)}));
-  });
+  return jobs_->Start(
+      tr("Adding scans"), [files, project = project_](ProgressSink& progress, const CancelToken& cancel) mutable {
+        Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
+        if (!scans) return Expected<std::any>(scans.error());
+        return Expected<std::any>(std::any(AddedScans{std::move(project), std::move(*scans)}));
+      });
 }
 
 bool MainWindow::ExportReport(const QString& dir) {
   if (project_.scans.empty()) return false;
-  return jobs_->Start(tr("Writing the report to %1").arg(dir), [project = project_, dir = dir.toStdString()](
-                                                                   ProgressSink& progress, const CancelToken& cancel) {
-    Expected<std::filesystem::path> index = report::WriteReport(project, dir, progress, cancel);
-    if (!index) return Expected<std::any>(index.error());
-    LogInfo("report written: " + index->string());
-    return Expected<std::any>(std::any(*index));
-  });
+  return jobs_->Start(tr("Writing the report to %1").arg(dir),
+                      [project = project_, dir = dir.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
+                        Expected<std::filesystem::path> index = report::WriteReport(project, dir, progress, cancel);
+                        if (!index) return Expected<std::any>(index.error());
+                        LogInfo("report written: " + index->string());
+                        return Expected<std::any>(std::any(*index));
+                      });
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
@@ -548,9 +574,9 @@ void MainWindow::closeEvent(QCloseEvent* event) {
 }
 
 void MainWindow::ShowAbout() {
-  QMessageBox::about(this, tr("About scanreg"),
-                     tr("<b>scanreg</b> %1<br>Registration of terrestrial laser scans.")
-                         .arg(QApplication::applicationVersion()));
+  QMessageBox::about(
+      this, tr("About scanreg"),
+      tr("<b>scanreg</b> %1<br>Registration of terrestrial laser scans.").arg(QApplication::applicationVersion()));
 }
 
 bool MainWindow::SaveScreenshot(const QString& path) {

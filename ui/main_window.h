@@ -26,6 +26,7 @@ class JobRunner;
 class LogPanel;
 class MergePanel;
 class PoseDialog;
+class RegisterSettingsDialog;
 class NetworkPanel;
 class PairInspector;
 class ScanListPanel;
@@ -46,6 +47,10 @@ class MainWindow : public QMainWindow {
   bool SaveProject(const QString& path);  // synchronous, atomic
   // The options of the project's registration (also the pair panel's starting point).
   pipeline::RegisterOptions RegistrationOptions() const;
+  // The options stored in the project's settings as an undoable edit (false when nothing changed).
+  bool SetRegisterOptions(const pipeline::RegisterOptions& options);
+  // Registration → Settings…: the dialog (window-modal, does not block), for tests.
+  RegisterSettingsDialog* EditRegisterSettings();
   // Applies a pair registration (the pair panel's "Use this result") as an undoable edit; false,
   // with a dialog naming the scans, when it cannot be applied.
   bool UsePairResult(const io::LinkRecord& link);

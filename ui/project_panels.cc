@@ -20,8 +20,8 @@ QTableWidgetItem* Item(const QString& text, Qt::Alignment align = Qt::AlignRight
 ScanListPanel::ScanListPanel(QWidget* parent) : QTableWidget(parent) {
   setObjectName("ScanList");
   setColumnCount(8);
-  setHorizontalHeaderLabels({tr("Scan"), tr("Size"), tr("Points"), tr("Status"), tr("X (m)"), tr("Y (m)"),
-                             tr("Z (m)"), tr("Error vs reference")});
+  setHorizontalHeaderLabels({tr("Scan"), tr("Size"), tr("Points"), tr("Status"), tr("X (m)"), tr("Y (m)"), tr("Z (m)"),
+                             tr("Error vs reference")});
   verticalHeader()->hide();
   horizontalHeader()->setStretchLastSection(true);
   setSelectionBehavior(QAbstractItemView::SelectRows);
@@ -53,10 +53,17 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
     setItem(i, 0, name);
     setItem(i, 1, Item(scan ? QString("%1 × %2").arg(scan->cols).arg(scan->rows) : "-"));
     setItem(i, 2, Item(scan ? QString::number(scan->CountValid()) : "-"));
-    QTableWidgetItem* status = Item(!s.registered ? tr("unregistered") : s.manual_pose ? tr("manual pose") : tr("registered"),
-                                    Qt::AlignCenter);
-    status->setForeground(!s.registered ? QColor(190, 60, 40) : s.manual_pose ? QColor(200, 130, 0) : QColor(20, 140, 60));
-    if (s.manual_pose) status->setToolTip(tr("Placed by hand (Registration → Edit scan pose): no link evidence"));
+    const io::PoseState state = io::ScanPoseState(s);
+    QTableWidgetItem* status = Item(tr(io::PoseStateName(state)), Qt::AlignCenter);
+    status->setForeground(state == io::PoseState::kUnregistered ? QColor(190, 60, 40)
+                          : state == io::PoseState::kManual     ? QColor(200, 130, 0)
+                          : state == io::PoseState::kImported   ? QColor(40, 90, 170)
+                                                                : QColor(20, 140, 60));
+    if (state == io::PoseState::kManual) {
+      status->setToolTip(tr("Placed by hand (Registration → Edit scan pose): no link evidence"));
+    } else if (state == io::PoseState::kImported) {
+      status->setToolTip(tr("Pose read from a file (pose file or the scan's header): no link evidence of ours"));
+    }
     setItem(i, 3, status);
     const Eigen::Vector3d t = s.world_from_scan.translation();
     for (int k = 0; k < 3; ++k) setItem(i, 4 + k, Item(QString::number(t[k], 'f', 3)));

@@ -8,8 +8,8 @@
 #include <limits>
 #include <string>
 
-#include "core/geometry/transform.h"
 #include "core/common/atomic_file.h"
+#include "core/geometry/transform.h"
 #include "core/io/organize_default.h"
 #include "core/io/ply_header.h"
 #include "core/io/text_parse.h"
@@ -177,6 +177,24 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   Expected<PlyHeader> header = ParsePlyHeader(*text, path);
   if (!header) return header.error();
 
+  Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+  if (auto it = header->obj_info.find("scanreg_world_from_scan"); it != header->obj_info.end()) {
+    std::array<double, 16> m{};
+    const NumberParse p = ParseNumbers(it->second, m.data(), 16);
+    Eigen::Matrix3d raw, rotation;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) raw(r, c) = m[r * 4 + c];
+    if (p.status != ParseStatus::kOk || p.count != 16 || !ProjectToRotation(raw, &rotation)) {
+      return MakeError(ErrorCode::kParseError,
+                       path.string() +
+                           ": \"obj_info scanreg_world_from_scan\" must hold the 16 numbers of a rigid "
+                           "4x4 matrix, row-major");
+    }
+    world_from_scan = IsometryFromRowMajor(m);
+  }
+  // scanreg's own PLY holds world coordinates (every reader places them); back to the scanner frame.
+  const bool points_in_world = header->obj_info.count("scanreg_points_in_world") > 0;
+  const Eigen::Isometry3d scan_from_world = world_from_scan.inverse();
   std::vector<Eigen::Vector3f> points;
   std::vector<float> intensity;
   std::vector<int> grid;  // vertex index per file cell, -1 = empty
@@ -262,7 +280,8 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         else if (p == ii)
           v[3] = value * scale;
       }
-      points[k] = Eigen::Vector3f(float(v[0]), float(v[1]), float(v[2]));
+      const Eigen::Vector3d p(v[0], v[1], v[2]);
+      points[k] = (points_in_world ? scan_from_world * p : p).cast<float>();
       if (ii >= 0) intensity[k] = float(v[3]);
     }
   }
@@ -307,20 +326,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     if (!organized) return organized.error();
     scan = std::move(*organized);
   }
-  if (auto it = header->obj_info.find("scanreg_world_from_scan"); it != header->obj_info.end()) {
-    std::array<double, 16> m{};
-    const NumberParse p = ParseNumbers(it->second, m.data(), 16);
-    Eigen::Matrix3d raw, rotation;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) raw(r, c) = m[r * 4 + c];
-    if (p.status != ParseStatus::kOk || p.count != 16 || !ProjectToRotation(raw, &rotation)) {
-      return MakeError(ErrorCode::kParseError,
-                       path.string() +
-                           ": \"obj_info scanreg_world_from_scan\" must hold the 16 numbers of a rigid "
-                           "4x4 matrix, row-major");
-    }
-    scan.world_from_scan = IsometryFromRowMajor(m);
-  }
+  scan.world_from_scan = world_from_scan;
   progress.Report(1.0, stage);
   return scan;
 }
@@ -329,7 +335,9 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
                 const CancelToken& cancel) {
   if (Status s = scan.Validate(); !s) return s;
   const std::size_t n_valid = scan.CountValid();
-  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by scanreg\n";
+  std::string header =
+      "ply\nformat binary_little_endian 1.0\ncomment written by scanreg: x y z in world coordinates (metres); "
+      "scanreg_world_from_scan is the scanner's pose\n";
   header += "obj_info num_cols " + std::to_string(scan.cols) + "\n";
   header += "obj_info num_rows " + std::to_string(scan.rows) + "\n";
   header += "obj_info scanreg_world_from_scan";
@@ -341,8 +349,9 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   }
   header += "\n";
   if (!scan.angles.empty()) header += "obj_info scanreg_angular_grid 1\n";
+  header += "obj_info scanreg_points_in_world 1\n";
   header += "element vertex " + std::to_string(n_valid) +
-            "\nproperty float x\nproperty float y\nproperty float z\nproperty float intensity\n";
+            "\nproperty double x\nproperty double y\nproperty double z\nproperty float intensity\n";
   header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";
 
@@ -361,8 +370,9 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
     for (int c = 0; c < scan.cols; ++c) {
       const std::size_t i = scan.Index(r, c);
       if (!scan.valid[i]) continue;
-      const float v[4] = {scan.points[i].x(), scan.points[i].y(), scan.points[i].z(), scan.reflectance[i]};
-      chunk.append(reinterpret_cast<const char*>(v), sizeof(v));
+      const Eigen::Vector3d p = scan.world_from_scan * scan.points[i].cast<double>();
+      chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+      chunk.append(reinterpret_cast<const char*>(&scan.reflectance[i]), sizeof(float));
       index[static_cast<std::size_t>(fr) * scan.cols + c] = next++;
     }
     if (chunk.size() > (1 << 20)) {

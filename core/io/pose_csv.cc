@@ -9,7 +9,8 @@
 namespace scanreg::io {
 namespace {
 
-constexpr char kHeader[] = "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg";
+constexpr char kHeader[] = "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,status";
+constexpr char kHeaderWithoutStatus[] = "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg";  // scanreg 0.1
 constexpr double kDeg = 180.0 / M_PI;
 
 std::string CsvField(const std::string& s) {
@@ -56,9 +57,9 @@ Status WritePosesCsv(const std::filesystem::path& path, const std::vector<NamedP
     const Eigen::Vector3d t = p.world_from_scan.translation();
     for (double v : {t.x(), t.y(), t.z(), a.heading * kDeg, a.pitch * kDeg, a.roll * kDeg}) {
       text += ',';
-      text.append(buf, AppendNumber(buf, v + 0.0));  // + 0.0: no "-0"
+      if (p.status != kUnregisteredStatus) text.append(buf, AppendNumber(buf, v + 0.0));  // + 0.0: no "-0"
     }
-    text += '\n';
+    text += ',' + CsvField(p.status) + '\n';
   }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;
@@ -71,10 +72,11 @@ Expected<std::vector<NamedPose>> ReadPosesCsv(const std::filesystem::path& path)
   if (!text) return text.error();
   LineReader lines(*text);
   std::string_view line;
-  if (!lines.Next(&line) || line != kHeader) {
+  if (!lines.Next(&line) || (line != kHeader && line != kHeaderWithoutStatus)) {
     return MakeError(ErrorCode::kParseError,
                      AtLine(path, 1) + "expected the header '" + kHeader + "'; is this a scanreg pose CSV?");
   }
+  const bool has_status = line == kHeader;
   std::vector<NamedPose> poses;
   while (lines.Next(&line)) {
     if (IsBlank(line)) continue;
@@ -85,15 +87,21 @@ Expected<std::vector<NamedPose>> ReadPosesCsv(const std::filesystem::path& path)
       return MakeError(ErrorCode::kParseError, at + "the scan name is missing or badly quoted");
     }
     double v[6];
-    for (double& x : v) {
-      double parsed = 0;
-      if (!NextField(&line, &field) || ParseNumbers(field, &parsed, 1).count != 1) {
+    std::string numbers[6];
+    for (std::string& x : numbers) {
+      if (!NextField(&line, &x)) return MakeError(ErrorCode::kParseError, at + "a field is badly quoted");
+    }
+    if (has_status && !NextField(&line, &pose.status)) {
+      return MakeError(ErrorCode::kParseError, at + "the status field is missing or badly quoted");
+    }
+    if (!line.empty()) return MakeError(ErrorCode::kParseError, at + "more fields than the header names");
+    if (pose.status == kUnregisteredStatus) continue;  // no pose to read
+    for (int k = 0; k < 6; ++k) {
+      if (ParseNumbers(numbers[k], &v[k], 1).count != 1) {
         return MakeError(ErrorCode::kParseError, at + "expected 6 numbers after the scan name (x, y, z in metres, "
                                                       "heading, pitch, roll in degrees)");
       }
-      x = parsed;
     }
-    if (!line.empty()) return MakeError(ErrorCode::kParseError, at + "more than 7 fields");
     pose.world_from_scan.linear() = RotationFromHeadingPitchRoll({v[3] / kDeg, v[4] / kDeg, v[5] / kDeg});
     pose.world_from_scan.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
     poses.push_back(std::move(pose));

@@ -4,8 +4,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "core/geometry/transform.h"
 #include "core/common/atomic_file.h"
+#include "core/common/log.h"
+#include "core/geometry/transform.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::io {
@@ -61,10 +62,10 @@ Expected<std::vector<NamedPose>> ReadBunConf(const std::filesystem::path& path) 
     const std::string_view key = NextToken(&rest);
     if (key.empty() || key[0] == '#' || key == "camera") continue;
     const long n = lines.line_number();
-    if (key != "bmesh") {
-      return ParseErr(path, n,
-                      "unknown keyword " + QuoteToken(key) +
-                          "; a .conf file has `camera ...` and `bmesh <file> tx ty tz qx qy qz qw` lines");
+    if (key != "bmesh") {  // e.g. the dragon's `mesh <reconstruction>` line: not a scan of the project
+      LogWarning(AtLine(path, n) + "skipped the " + QuoteToken(key) +
+                 " line; scanreg reads the scan poses of `bmesh <file> tx ty tz qx qy qz qw` lines");
+      continue;
     }
     const std::string_view file = NextToken(&rest);
     double v[8];
@@ -114,6 +115,7 @@ Expected<std::vector<NamedPose>> ReadPosesJson(const std::filesystem::path& path
   for (std::size_t i = 0; i < j["poses"].size(); ++i) {
     const nlohmann::json& e = j["poses"][i];
     const std::string where = path.string() + ": poses[" + std::to_string(i) + "]: ";
+    if (e.is_object() && e.contains("status") && e["status"] == kUnregisteredStatus) continue;
     if (!e.is_object() || !e.contains("scan") || !e["scan"].is_string() || !e.contains("world_from_scan") ||
         !e["world_from_scan"].is_array() || e["world_from_scan"].size() != 16) {
       return MakeError(ErrorCode::kParseError,
@@ -127,7 +129,8 @@ Expected<std::vector<NamedPose>> ReadPosesJson(const std::filesystem::path& path
     }
     Expected<Eigen::Isometry3d> t = RigidFromRowMajor(m, where);
     if (!t) return t.error();
-    poses.push_back({e["scan"].get<std::string>(), *t});
+    poses.push_back({e["scan"].get<std::string>(), *t,
+                     e.contains("status") && e["status"].is_string() ? e["status"].get<std::string>() : std::string()});
   }
   return poses;
 }
@@ -138,10 +141,14 @@ Status WritePosesJson(const std::filesystem::path& path, const std::vector<Named
   std::string s = "{\n  \"version\": 1,\n  \"poses\": [";
   for (std::size_t i = 0; i < poses.size(); ++i) {
     s += i ? ",\n    " : "\n    ";
-    s += "{\"scan\": " + nlohmann::json(poses[i].scan).dump() + ", \"world_from_scan\": [" +
-         MatrixText(poses[i].world_from_scan, ", ", ", ");
-    s.resize(s.size() - 2);
-    s += "]}";
+    s += "{\"scan\": " + nlohmann::json(poses[i].scan).dump();
+    if (!poses[i].status.empty()) s += ", \"status\": " + nlohmann::json(poses[i].status).dump();
+    if (poses[i].status != kUnregisteredStatus) {
+      s += ", \"world_from_scan\": [" + MatrixText(poses[i].world_from_scan, ", ", ", ");
+      s.resize(s.size() - 2);
+      s += "]";
+    }
+    s += "}";
   }
   s += poses.empty() ? "]\n}\n" : "\n  ]\n}\n";
   return WriteText(path, s);

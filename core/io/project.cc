@@ -97,9 +97,10 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
 
 // {"scans": [names], "matches": [[counts]]}: one row of non-negative integers per named scan.
 Status ConfusionFromJson(const json& j, const std::string& where, Project* project) {
-  const Error bad = MakeError(ErrorCode::kParseError,
-                              where + ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
-                                      "non-negative integers per scan); delete it and register again");
+  const Error bad =
+      MakeError(ErrorCode::kParseError, where +
+                                            ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
+                                            "non-negative integers per scan); delete it and register again");
   if (!j.is_object() || !j.contains("scans") || !j.contains("matches")) return bad;
   const json& names = j["scans"];
   const json& rows = j["matches"];
@@ -122,11 +123,35 @@ Status ConfusionFromJson(const json& j, const std::string& where, Project* proje
 
 const char* LinkStatusName(LinkStatus status) {
   switch (status) {
-    case LinkStatus::kOk: return "ok";
-    case LinkStatus::kWeak: return "weak";
-    case LinkStatus::kFailed: return "failed";
+    case LinkStatus::kOk:
+      return "ok";
+    case LinkStatus::kWeak:
+      return "weak";
+    case LinkStatus::kFailed:
+      return "failed";
   }
   return "failed";
+}
+
+PoseState ScanPoseState(const ProjectScan& scan) {
+  if (!scan.registered) return PoseState::kUnregistered;
+  if (scan.manual_pose) return PoseState::kManual;
+  if (scan.imported_pose) return PoseState::kImported;
+  return PoseState::kRegistered;
+}
+
+const char* PoseStateName(PoseState state) {
+  switch (state) {
+    case PoseState::kUnregistered:
+      return "unregistered";
+    case PoseState::kRegistered:
+      return "registered";
+    case PoseState::kImported:
+      return "imported";
+    case PoseState::kManual:
+      return "manual pose";
+  }
+  return "unregistered";
 }
 
 int Project::FindScan(const std::string& name) const {
@@ -137,7 +162,8 @@ int Project::FindScan(const std::string& name) const {
 
 const Eigen::MatrixXi* Project::CurrentConfusion() const {
   const auto n = static_cast<Eigen::Index>(scans.size());
-  if (confusion.rows() != n || confusion.cols() != n || confusion_scans.size() != scans.size() || n == 0) return nullptr;
+  if (confusion.rows() != n || confusion.cols() != n || confusion_scans.size() != scans.size() || n == 0)
+    return nullptr;
   for (std::size_t i = 0; i < scans.size(); ++i)
     if (confusion_scans[i] != scans[i].name) return nullptr;
   return &confusion;
@@ -152,17 +178,17 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
   try {
     j = json::parse(in);
   } catch (const json::parse_error& e) {
-    return MakeError(ErrorCode::kParseError, where + " is not valid JSON (" + e.what() +
-                                                 "); restore it from a backup or create a new project");
+    return MakeError(ErrorCode::kParseError,
+                     where + " is not valid JSON (" + e.what() + "); restore it from a backup or create a new project");
   }
   if (!j.is_object() || !j.contains("schema_version") || !j["schema_version"].is_number_integer()) {
     return MakeError(ErrorCode::kParseError, where + " has no schema_version; is it a scanreg project?");
   }
   const int version = j["schema_version"].get<int>();
   if (version != Project::kSchemaVersion) {
-    return MakeError(ErrorCode::kUnsupported, where + " has schema version " + std::to_string(version) +
-                                                  "; this scanreg reads version " +
-                                                  std::to_string(Project::kSchemaVersion) + " — use a matching scanreg");
+    return MakeError(ErrorCode::kUnsupported,
+                     where + " has schema version " + std::to_string(version) + "; this scanreg reads version " +
+                         std::to_string(Project::kSchemaVersion) + " — use a matching scanreg");
   }
   Project project;
   project.file = fs::absolute(path);
@@ -203,6 +229,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       }
       scan.unregistered_reason = s.value("unregistered_reason", "");
       scan.manual_pose = s.value("manual_pose", false);
+      scan.imported_pose = s.value("imported_pose", false);
       project.scans.push_back(std::move(scan));
     }
     for (const ProjectScan& scan : project.scans) {
@@ -250,6 +277,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
     if (s.coarse_world_from_scan) js["coarse_world_from_scan"] = PoseToJson(*s.coarse_world_from_scan);
     if (!s.unregistered_reason.empty()) js["unregistered_reason"] = s.unregistered_reason;
     if (s.manual_pose) js["manual_pose"] = true;
+    if (s.imported_pose) js["imported_pose"] = true;
     scans.push_back(std::move(js));
   }
   json links = json::array();

@@ -30,8 +30,8 @@ struct LinkRecord {
   int ransac_inliers = 0;
   int consistent = 0;
   double rms_m = 0.0;
-  double overlap = 0.0;  // fraction [0, 1]
-  double conflict = 0.0; // fraction of points in the other scan's free space [0, 1]
+  double overlap = 0.0;   // fraction [0, 1]
+  double conflict = 0.0;  // fraction of points in the other scan's free space [0, 1]
   int iterations = 0;
   double seconds = 0.0;
   Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
@@ -41,11 +41,11 @@ struct LinkRecord {
 };
 
 struct ProjectScan {
-  std::string name;                 // unique within the project
-  std::filesystem::path path;       // absolute while in memory; relative to the project on disk
-  int index_in_file = 0;            // for multi-scan files (PTX)
+  std::string name;            // unique within the project
+  std::filesystem::path path;  // absolute while in memory; relative to the project on disk
+  int index_in_file = 0;       // for multi-scan files (PTX)
   Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
-  bool registered = false;          // world_from_scan is a registration result (or the root)
+  bool registered = false;  // world_from_scan is a registration result (or the root)
   std::optional<Eigen::Isometry3d> reference_world_from_scan;
   std::optional<std::string> parent_override;  // scan-order override: register to this scan
   // From the last registration (optional in the file): the pose after the coarse step only
@@ -55,7 +55,16 @@ struct ProjectScan {
   // The user placed the scan by hand (Registration → Edit scan pose): its pose carries no link
   // evidence; the report and the scan list say so. Cleared when a registration places the scan.
   bool manual_pose = false;
+  // The pose was read from a file (a pose file given to `new --poses`, or the scan file's own
+  // registered pose: PTX/E57 header) and is used as it is: `registered` is true, merge and export
+  // accept it. Cleared when a registration re-estimates the scan (kept with --keep-imported).
+  bool imported_pose = false;
 };
+
+// Where a scan's pose comes from, for every front end and the report (one wording).
+enum class PoseState { kUnregistered, kRegistered, kImported, kManual };
+PoseState ScanPoseState(const ProjectScan& scan);
+const char* PoseStateName(PoseState state);  // "unregistered", "registered", "imported", "manual pose"
 
 struct Project {
   static constexpr int kSchemaVersion = 1;
@@ -63,8 +72,8 @@ struct Project {
   std::filesystem::path file;  // where it was loaded from / saved to; empty when new
   std::vector<ProjectScan> scans;
   std::vector<LinkRecord> links;
-  std::optional<std::string> root;                // root scan of the scan order
-  std::map<std::string, std::string> settings;    // option name -> value, as the user set them
+  std::optional<std::string> root;              // root scan of the scan order
+  std::map<std::string, std::string> settings;  // option name -> value, as the user set them
   // Confusion matrix C(i, j) of the last registration (W §2 step 3) and the names of the scans of
   // its rows and columns; empty when the project has not been registered. Optional in the file.
   Eigen::MatrixXi confusion;

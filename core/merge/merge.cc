@@ -41,11 +41,12 @@ Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const 
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
   progress.Report(0.9, "marching cubes");
   result.mesh = ExtractMesh(*grid);
-  if (options.remove_small_pieces) result.removed_triangles = RemoveSmallPieces(result.mesh, options.min_piece_fraction);
+  if (options.remove_small_pieces)
+    result.removed_triangles = RemoveSmallPieces(result.mesh, options.min_piece_fraction);
   if (result.mesh.triangles.empty()) {
     return MakeError(ErrorCode::kFailed,
                      "merge: the field has no zero crossing; the voxel may be too large for the data or the band too "
-                     "thin (try a smaller --voxel)");
+                     "thin (try a smaller voxel size)");
   }
   progress.Report(1.0, "done");
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

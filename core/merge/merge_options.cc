@@ -5,28 +5,27 @@
 
 namespace scanreg::merge {
 
-const char* MergeMethodName(MergeMethod method) {
-  return method == MergeMethod::kTsdf ? "tsdf" : "ml";
-}
+const char* MergeMethodName(MergeMethod method) { return method == MergeMethod::kTsdf ? "tsdf" : "ml"; }
 
 Status MergeOptions::Validate() const {
   auto bad = [](const std::string& what) { return Status(MakeError(ErrorCode::kInvalidArgument, what)); };
   if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) {
-    return bad("merge: voxel size (--voxel) must be > 0 metres, got " + std::to_string(voxel_m));
+    return bad("merge: voxel size must be > 0 metres, got " + std::to_string(voxel_m));
   }
   if (!(sigma_m > 0.0) || !std::isfinite(sigma_m)) {
     return bad("merge: range noise sigma must be > 0 metres, got " + std::to_string(sigma_m));
   }
   if (!(band_m >= 0.0) || !std::isfinite(band_m)) return bad("merge: band must be >= 0 metres");
   if (!(max_range_m >= 0.0) || !std::isfinite(max_range_m)) {
-    return bad("merge: maximum range (--max-range) must be >= 0 metres (0 = no limit)");
+    return bad("merge: maximum range must be >= 0 metres (0 = no limit)");
   }
   if (band_m > 0.0 && band_m < voxel_m) return bad("merge: band must be at least one voxel (or 0 for 3 voxels)");
   if (!(bin_m >= 0.0) || !std::isfinite(bin_m)) return bad("merge: histogram bin must be >= 0 metres");
   if (smooth_iterations < 0 || smooth_iterations > 100) {
-    return bad("merge: smoothing passes (--smooth) must be in 0..100, got " + std::to_string(smooth_iterations));
+    return bad("merge: smoothing passes must be in 0..100, got " + std::to_string(smooth_iterations));
   }
-  if (!(min_piece_fraction >= 0.0 && min_piece_fraction <= 1.0)) return bad("merge: min_piece_fraction must be in [0, 1]");
+  if (!(min_piece_fraction >= 0.0 && min_piece_fraction <= 1.0))
+    return bad("merge: min_piece_fraction must be in [0, 1]");
   if (!(max_grazing_deg > 0.0 && max_grazing_deg < 90.0)) return bad("merge: max_grazing_deg must be in (0, 90)");
   // Memory guard: a voxel far below the noise wastes memory without adding detail.
   if (voxel_m < 1e-5) return bad("merge: voxel size below 0.01 mm is not supported");

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "core/common/atomic_file.h"
+#include "core/common/log.h"
 
 namespace scanreg::merge {
 
@@ -18,10 +21,20 @@ void Append(std::string& out, const T& value) {
   out.append(reinterpret_cast<const char*>(&value), sizeof(T));  // little-endian hosts only (x86, arm)
 }
 
-std::string OriginComment(const Eigen::Vector3d& o) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "comment scanreg_origin %.6f %.6f %.6f\n", o.x(), o.y(), o.z());
-  return buf;
+// World coordinates in double: every reader (VTK, PCL, CloudCompare, MeshLab, Blender, Open3D)
+// places them without knowing anything of ours.
+void AppendWorld(std::string& out, const Eigen::Vector3d& origin, const Eigen::Vector3f& v) {
+  const Eigen::Vector3d p = origin + v.cast<double>();
+  Append(out, p.x()), Append(out, p.y()), Append(out, p.z());
+}
+
+const char* kDoubleVertex = "property double x\nproperty double y\nproperty double z\n";
+
+double LargestWorldCoordinate(const Mesh& mesh) {
+  double largest = 0.0;
+  for (const auto& v : mesh.vertices)
+    largest = std::max(largest, (mesh.origin + v.cast<double>()).cwiseAbs().maxCoeff());
+  return largest;
 }
 
 Status WriteAll(const std::filesystem::path& path, const std::string& bytes) {
@@ -33,13 +46,18 @@ Status WriteAll(const std::filesystem::path& path, const std::string& bytes) {
 
 }  // namespace
 
+double FloatRoundingError(double magnitude) {
+  const float f = static_cast<float>(std::abs(magnitude));
+  return 0.5 * (std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
+}
+
 Status WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh) {
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh\n" + OriginComment(mesh.origin);
-  out += "element vertex " + std::to_string(mesh.vertices.size()) +
-         "\nproperty float x\nproperty float y\nproperty float z\n";
-  out += "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
-  out.reserve(out.size() + mesh.vertices.size() * 12 + mesh.triangles.size() * 13);
-  for (const auto& v : mesh.vertices) Append(out, v.x()), Append(out, v.y()), Append(out, v.z());
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
+  out += "element vertex " + std::to_string(mesh.vertices.size()) + "\n" + kDoubleVertex;
+  out += "element face " + std::to_string(mesh.triangles.size()) +
+         "\nproperty list uchar int vertex_indices\nend_header\n";
+  out.reserve(out.size() + mesh.vertices.size() * 24 + mesh.triangles.size() * 13);
+  for (const auto& v : mesh.vertices) AppendWorld(out, mesh.origin, v);
   for (const auto& t : mesh.triangles) {
     Append(out, std::uint8_t(3));
     Append(out, std::int32_t(t[0])), Append(out, std::int32_t(t[1])), Append(out, std::int32_t(t[2]));
@@ -63,16 +81,27 @@ Status WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh) {
 
 Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
   std::string out(80, ' ');
-  const std::string title = "scanreg merged mesh, coordinates relative to its origin";
+  const std::string title = "scanreg merged mesh, world coordinates (metres)";
   std::memcpy(out.data(), title.data(), title.size());
   Append(out, std::uint32_t(mesh.triangles.size()));
   for (const auto& t : mesh.triangles) {
+    Eigen::Vector3f corners[4];
+    for (int k = 0; k < 3; ++k) corners[k + 1] = (mesh.origin + mesh.vertices[t[k]].cast<double>()).cast<float>();
+    // The normal from the local (origin-relative) vertices: exact even where world floats are coarse.
     const Eigen::Vector3f &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
-    Eigen::Vector3f n = (b - a).cross(c - a);
-    if (n.norm() > 0) n.normalize();
-    const Eigen::Vector3f* corners[4] = {&n, &a, &b, &c};
-    for (const Eigen::Vector3f* p : corners) Append(out, p->x()), Append(out, p->y()), Append(out, p->z());
+    corners[0] = (b - a).cross(c - a);
+    if (corners[0].norm() > 0) corners[0].normalize();
+    for (const Eigen::Vector3f& p : corners) Append(out, p.x()), Append(out, p.y()), Append(out, p.z());
     Append(out, std::uint16_t(0));
+  }
+  const double largest = LargestWorldCoordinate(mesh);
+  if (FloatRoundingError(largest) > kFloatWarningM) {
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "STL stores 32-bit floats: '%s' has world coordinates up to %.0f m, rounded by up to %.2f mm; "
+                  "write .ply or .obj for exact coordinates",
+                  path.string().c_str(), largest, FloatRoundingError(largest) * 1000);
+    LogWarning(buf);
   }
   return WriteAll(path, out);
 }
@@ -89,10 +118,10 @@ Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
 
 Status WritePointCloudPly(const std::filesystem::path& path, const Eigen::Vector3d& origin,
                           const std::vector<Eigen::Vector3f>& points) {
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points\n" + OriginComment(origin);
-  out += "element vertex " + std::to_string(points.size()) + "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-  out.reserve(out.size() + points.size() * 12);
-  for (const auto& v : points) Append(out, v.x()), Append(out, v.y()), Append(out, v.z());
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
+  out += "element vertex " + std::to_string(points.size()) + "\n" + kDoubleVertex + "end_header\n";
+  out.reserve(out.size() + points.size() * 24);
+  for (const auto& v : points) AppendWorld(out, origin, v);
   return WriteAll(path, out);
 }
 

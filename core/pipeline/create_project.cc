@@ -1,7 +1,10 @@
 #include "core/pipeline/create_project.h"
 
+#include <algorithm>
 #include <set>
 
+#include "core/common/log.h"
+#include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
 #include "core/io/scan_file.h"
@@ -9,18 +12,62 @@
 namespace scanreg::pipeline {
 namespace {
 
-Expected<std::vector<io::NamedPose>> ReadPoses(const std::filesystem::path& path) {
+std::string LowerExtension(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".conf") return io::ReadBunConf(path);
-  if (ext == ".json") return io::ReadPosesJson(path);
-  return MakeError(ErrorCode::kUnsupported, "pose file '" + path.string() +
-                                                "' has an unknown extension; use a Stanford .conf or a poses .json");
+  return ext;
 }
 
-// Applies each named pose to the scan whose name or file name matches; every pose must match.
+// A folder of 4x4 matrix files, one per scan named <scan>.txt (what `export-poses --format txt`
+// writes), in name order.
+Expected<std::vector<io::NamedPose>> ReadMatrixFolder(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> files;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.is_regular_file(ec) && LowerExtension(e.path()) == ".txt") files.push_back(e.path());
+  if (ec) return MakeError(ErrorCode::kIoError, "cannot list the pose folder '" + dir.string() + "': " + ec.message());
+  if (files.empty()) {
+    return MakeError(ErrorCode::kNotFound, "the pose folder '" + dir.string() + "' holds no <scan>.txt matrix file");
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<io::NamedPose> poses;
+  for (const auto& f : files) {
+    Expected<Eigen::Isometry3d> t = io::ReadMatrixTxt(f);
+    if (!t) return t.error();
+    poses.push_back({f.stem().string(), *t, ""});
+  }
+  return poses;
+}
+
+}  // namespace
+
+Expected<std::vector<io::NamedPose>> ReadPoseFile(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return ReadMatrixFolder(path);
+  const std::string ext = LowerExtension(path);
+  if (ext == ".conf") return io::ReadBunConf(path);
+  if (ext == ".json") return io::ReadPosesJson(path);
+  if (ext == ".csv") return io::ReadPosesCsv(path);
+  if (ext == ".txt") {
+    Expected<Eigen::Isometry3d> t = io::ReadMatrixTxt(path);
+    if (!t) return t.error();
+    return std::vector<io::NamedPose>{{path.stem().string(), *t, ""}};
+  }
+  return MakeError(ErrorCode::kUnsupported,
+                   "pose file '" + path.string() +
+                       "' has an unknown extension; use a Stanford .conf, a poses .json or .csv, a 4x4 matrix "
+                       "<scan>.txt or a folder of them (every format `export-poses` writes)");
+}
+
+namespace {
+
+// Applies each named pose to the scan whose name or file name matches. A pose file may cover more
+// scans than the project holds (a .conf of the whole object): poses that match no scan are named in
+// a warning; none matching at all is an error (the wrong file).
 Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::NamedPose>& poses, bool reference,
                   io::Project& project) {
+  std::string unmatched;
+  int unmatched_count = 0;
   for (const io::NamedPose& pose : poses) {
     bool matched = false;
     for (io::ProjectScan& scan : project.scans) {
@@ -31,13 +78,20 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
         scan.reference_world_from_scan = pose.world_from_scan;
       } else {
         scan.world_from_scan = pose.world_from_scan;
+        scan.registered = scan.imported_pose = true;
+        scan.unregistered_reason.clear();
       }
       matched = true;
     }
-    if (!matched) {
-      return MakeError(ErrorCode::kNotFound, "pose file '" + pose_file.string() + "' names scan '" + pose.scan +
-                                                 "', which is not among the project's scans; check the file names");
-    }
+    if (!matched) unmatched += (unmatched_count++ ? ", '" : "'") + pose.scan + "'";
+  }
+  if (unmatched_count == static_cast<int>(poses.size())) {
+    return MakeError(ErrorCode::kNotFound, "pose file '" + pose_file.string() + "' names no scan of the project (" +
+                                               unmatched + "); check that it belongs to these scan files");
+  }
+  if (unmatched_count > 0) {
+    LogWarning("pose file '" + pose_file.string() + "': " + std::to_string(unmatched_count) +
+               " pose(s) match no scan of the project and were not used: " + unmatched);
   }
   return Status::Ok();
 }
@@ -67,12 +121,16 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
       ps.path = path;
       ps.index_in_file = static_cast<int>(k);
       ps.world_from_scan = scan.world_from_scan;
+      // A registered pose in the file's header (another program's registration) is used as it is.
+      ps.registered = ps.imported_pose = !scan.world_from_scan.matrix().isIdentity(1e-12);
       ps.reference_world_from_scan = scan.reference_world_from_scan;
       scan.name = ps.name;
       result.scans.push_back(std::move(ps));
       if (keep_scans) read.push_back(std::move(scan));
     }
   }
+  // A single scan is its own frame: nothing to register it to, and it can be merged and exported.
+  if (result.scans.size() == 1) result.scans[0].registered = true;
   project = std::move(result);
   return read;
 }
@@ -85,10 +143,10 @@ Expected<io::Project> CreateProject(const std::filesystem::path& project_path, c
   io::Project project;
   project.file = std::filesystem::absolute(project_path);
   if (auto scans = AppendScanFiles(project, options.scan_files, false, progress, cancel); !scans) return scans.error();
-  for (const auto& [file, reference] : {std::make_pair(options.poses, false),
-                                        std::make_pair(options.reference_poses, true)}) {
+  for (const auto& [file, reference] :
+       {std::make_pair(options.poses, false), std::make_pair(options.reference_poses, true)}) {
     if (!file) continue;
-    Expected<std::vector<io::NamedPose>> poses = ReadPoses(*file);
+    Expected<std::vector<io::NamedPose>> poses = ReadPoseFile(*file);
     if (!poses) return poses.error();
     if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
   }
@@ -123,7 +181,8 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   }
   project.settings["simulated.stations"] = std::to_string(options.stations);
   project.settings["simulated.seed"] = std::to_string(options.seed);
-  project.settings["simulated.size"] = std::to_string(options.scanner.cols) + "x" + std::to_string(options.scanner.rows);
+  project.settings["simulated.size"] =
+      std::to_string(options.scanner.cols) + "x" + std::to_string(options.scanner.rows);
   project.settings["simulated.noise_m"] = std::to_string(options.scanner.range_noise_m);
   if (Status s = io::SaveProject(project, project_path); !s) return s.error();
   return project;

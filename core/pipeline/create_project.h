@@ -9,6 +9,7 @@
 #include "core/common/expected.h"
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
+#include "core/io/pose_file.h"
 #include "core/io/project.h"
 #include "core/simulate/project_sim.h"
 
@@ -16,20 +17,26 @@ namespace scanreg::pipeline {
 
 struct CreateProjectOptions {
   std::vector<std::filesystem::path> scan_files;  // PTX (one or more scans each), PLY, PCD
-  // Optional pose files: Stanford .conf or scanreg poses .json; matched to scans by scan name
-  // or file name. `poses` become the initial world_from_scan, `reference_poses` the reference.
+  // Optional pose files (ReadPoseFile); matched to scans by scan name or file name. `poses` become
+  // the scans' imported poses (ProjectScan::imported_pose), `reference_poses` the reference.
   std::optional<std::filesystem::path> poses;
   std::optional<std::filesystem::path> reference_poses;
 };
 
+// Every pose format `export-poses` writes, by extension: Stanford .conf, poses .json, poses .csv,
+// one 4x4 matrix <scan>.txt, or a folder of <scan>.txt files.
+Expected<std::vector<io::NamedPose>> ReadPoseFile(const std::filesystem::path& path);
+
 // Reads every scan file (to check it and learn its scans), builds the project and saves it at
 // project_path. Scan names are unique (a suffix is added on collision). A scan with no valid
-// point is an error naming it. Pose-file entries that match no scan are an error too.
+// point is an error naming it. Pose-file entries that match no scan are named in a warning (an
+// error when none matches).
 Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
                                     ProgressSink& progress, const CancelToken& cancel);
 
 // Reads scan files and appends their scans to `project` (the GUI's Add scans): each scan named
-// uniquely within the project (a suffix on collision), its pose from the file. With keep_scans,
+// uniquely within the project (a suffix on collision), its pose from the file (imported when the
+// file holds a registered pose; a project of one scan has that scan in place). With keep_scans,
 // returns the scans read, in the order appended, named as in the project (otherwise an empty
 // list: each file's points are dropped once checked). On error `project` is unchanged.
 Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,

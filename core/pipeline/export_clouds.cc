@@ -1,15 +1,32 @@
 #include "core/pipeline/export_clouds.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <map>
 
+#include "core/common/log.h"
+#include "core/io/las_writer.h"
 #include "core/io/scan_file.h"
+#include "core/merge/mesh_io.h"
 
 namespace scanreg::pipeline {
 namespace {
 
-// The pose moved into the points: p_world = world_from_scan p. The angular grid described the
-// scanner's lines of sight, which no longer start at the origin, so it is dropped.
+// The pose moved into the points: p_world = world_from_scan p, as floats (PTX, E57). The angular
+// grid described the scanner's lines of sight, which no longer start at the origin, so it is dropped.
+// A warning names the scan when floats round its world coordinates by more than 0.1 mm.
 void ApplyPose(Scan& scan) {
+  double largest = 0;
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i])
+      largest = std::max(largest, (scan.world_from_scan * scan.points[i].cast<double>()).cwiseAbs().maxCoeff());
+  if (merge::FloatRoundingError(largest) > merge::kFloatWarningM) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "world coordinates up to %.0f m are rounded by up to %.2f mm", largest,
+                  1e3 * merge::FloatRoundingError(largest));
+    LogWarning("scan '" + scan.name + "': " + buf +
+               " in 32-bit floats; keep the poses in the header (no --apply-poses) or export ply or las (double)");
+  }
   const Eigen::Isometry3f t = scan.world_from_scan.cast<float>();
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) scan.points[i] = t * scan.points[i];
@@ -17,11 +34,28 @@ void ApplyPose(Scan& scan) {
   scan.angles = AngularGrid{};
 }
 
+// One scan as LAS: world coordinates (double), intensity from reflectance, point source ID = the
+// scan's number in the project (from 1: LAS reserves 0), named in the file's VLR.
+Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::uint16_t source_id) {
+  io::LasCloud cloud;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid[i]) continue;
+    cloud.points.push_back(scan.world_from_scan * scan.points[i].cast<double>());
+    cloud.reflectance.push_back(scan.reflectance[i]);
+  }
+  cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
+  cloud.source_names.assign(source_id + 1, "");
+  cloud.source_names[source_id] = scan.name;
+  return io::WriteLas(path, cloud);
+}
+
 }  // namespace
 
+bool WorldFormat(const std::string& format) { return format == "ply" || format == "las"; }
+
 Status ExportCloudsOptions::Validate() const {
-  if (format != "ptx" && format != "e57" && format != "ply") {
-    return MakeError(ErrorCode::kInvalidArgument, "export format must be ptx, e57 or ply, not '" + format + "'");
+  if (format != "ptx" && format != "e57" && format != "ply" && format != "las") {
+    return MakeError(ErrorCode::kInvalidArgument, "export format must be ptx, e57, ply or las, not '" + format + "'");
   }
   if (dir.empty()) return MakeError(ErrorCode::kInvalidArgument, "give an output folder for the exported clouds");
   return Status::Ok();
@@ -72,7 +106,7 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
     if (last_use[ps.path] == i) open_files.erase(file);
     scan.name = ps.name;
     scan.world_from_scan = ps.world_from_scan;
-    if (options.apply_poses) ApplyPose(scan);
+    if (options.apply_poses && !WorldFormat(options.format)) ApplyPose(scan);
     out.file = options.dir / (ps.name + "." + options.format);
     for (const io::ProjectScan& input : project.scans) {
       if (fs::exists(out.file, ec) && fs::equivalent(out.file, input.path, ec)) {
@@ -82,7 +116,11 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
     }
     out.points = scan.CountValid();
     SubProgress write_progress(progress, (i + 0.5) / n, (i + 1) / n);
-    if (Status s = io::WriteScanFile(out.file, {scan}, write_progress, cancel); !s) return s.error();
+    if (options.format == "las") {
+      if (Status s = WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1)); !s) return s.error();
+    } else if (Status s = io::WriteScanFile(out.file, {scan}, write_progress, cancel); !s) {
+      return s.error();
+    }
     result.push_back(out);
   }
   progress.Report(1.0, "clouds exported");

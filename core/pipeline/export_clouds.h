@@ -16,13 +16,20 @@ namespace scanreg::pipeline {
 
 struct ExportCloudsOptions {
   std::filesystem::path dir;   // output folder, created when missing
-  std::string format = "ptx";  // ptx | e57 | ply: the file extension (written by io::WriteScanFile)
-  // false: points in the scanner frame, world_from_scan in the header (lossless, re-registrable);
-  // true: points in world coordinates (float: keep coordinates near the origin), identity header.
+  std::string format = "ptx";  // ptx | e57 | ply | las: the file extension
+  // PTX and E57 (their readers apply the header pose): false: points in the scanner frame,
+  // world_from_scan in the header (lossless, re-registrable); true: points in world coordinates
+  // as floats (a warning names each scan rounded by more than 0.1 mm), identity header.
+  // PLY and LAS always hold world coordinates, exactly (WorldFormat): PLY as doubles with the pose
+  // and grid kept for scanreg (io::WritePly), LAS 1.4 at 0.1 mm (io::WriteLas, point source ID =
+  // the scan's number in the project, from 1).
   bool apply_poses = false;
 
   Status Validate() const;
 };
+
+// Formats whose points are always world coordinates in double precision (ply, las).
+bool WorldFormat(const std::string& format);
 
 struct ExportedScan {
   std::string name;

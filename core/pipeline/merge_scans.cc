@@ -1,5 +1,7 @@
 #include "core/pipeline/merge_scans.h"
 
+#include "core/io/las_writer.h"
+
 #include <cctype>
 #include <string>
 
@@ -43,13 +45,22 @@ Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return m
 Status ValidatePointsPath(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".ply") return Status::Ok();
-  return MakeError(ErrorCode::kInvalidArgument,
-                   "merge: the merged point cloud is written as PLY; give --points a .ply file, not " + path.string());
+  if (ext == ".ply" || ext == ".las") return Status::Ok();
+  return MakeError(
+      ErrorCode::kInvalidArgument,
+      "merge: the merged point cloud is written as PLY or LAS; give the points file a .ply or .las name, not " +
+          path.string());
 }
 
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
   if (Status s = ValidatePointsPath(path); !s) return s;
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".las") {
+    io::LasCloud cloud;
+    for (const auto& v : mesh.vertices) cloud.points.push_back(mesh.origin + v.cast<double>());
+    return io::WriteLas(path, cloud);
+  }
   return merge::WritePointCloudPly(path, mesh.origin, mesh.vertices);
 }
 

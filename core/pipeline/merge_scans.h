@@ -27,8 +27,9 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 
 // Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic.
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);
-// Writes the merged point cloud (the mesh's vertices: points on the merged surface) as a binary
-// PLY; atomic. Other extensions than .ply are an error.
+// Writes the merged point cloud (the mesh's vertices: points on the merged surface) in world
+// coordinates: a binary PLY of doubles (.ply) or LAS 1.4 at 0.1 mm (.las); atomic. Other extensions
+// are an error.
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh);
 // The check WritePoints makes first, for callers to run before a long merge.
 Status ValidatePointsPath(const std::filesystem::path& path);

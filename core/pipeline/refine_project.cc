@@ -80,7 +80,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
       link.status = io::LinkStatus::kFailed;
       link.reason = Format(
           "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
-          "distance %.1f mm): diverged; correct the start pose or raise --overlap-distance",
+          "distance %.1f mm): diverged; correct the start pose or raise the overlap distance",
           1e3 * moved, 1e3 * options.overlap_distance_m);
     } else if (!(reason = SurfaceFailure(t, link)).empty()) {
       link.status = io::LinkStatus::kFailed;
@@ -110,9 +110,9 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
                                                        const CancelToken& cancel) {
   if (Status s = raw_options.Validate(); !s) return s.error();
   if (raw_options.fine == FineMethod::kKeypoints) {
-    return MakeError(
-        ErrorCode::kInvalidArgument,
-        "--coarse none has no feature matches for --fine keypoints; use --fine em, projective-icp or dense");
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "coarse method none (refine from the current poses) has no feature matches for the fine method "
+                     "keypoints; use em, projective-icp or dense");
   }
   const RegisterOptions options = ScaledOptions(raw_options);
   const int n = static_cast<int>(scans.size());

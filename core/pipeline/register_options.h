@@ -17,8 +17,8 @@
 namespace scanreg::pipeline {
 
 enum class FineMethod {
-  kKeypoints,  // W §2 step 9: ICP on the consistent keypoint 3D points
-  kDense,      // point-to-plane ICP on voxel-downsampled full scans, robust kernel
+  kKeypoints,      // W §2 step 9: ICP on the consistent keypoint 3D points
+  kDense,          // point-to-plane ICP on voxel-downsampled full scans, robust kernel
   kEm,             // S §3.2 on the range images (point-to-plane M-step, core/registration/em_align.h)
   kProjectiveIcp,  // S's baseline [15]: correspondences along the parent's lines of sight
 };
@@ -44,9 +44,9 @@ struct LinkThresholds {
 
 struct RegisterOptions {
   SiftOptions sift;
-  MatchOptions match;                // ratio t_des = 0.66 (W)
-  ReliabilityOptions reliability;    // t_std = 0.1 m (W)
-  CoarseOptions coarse;              // method: kEpnp (W) or k3d
+  MatchOptions match;              // ratio t_des = 0.66 (W)
+  ReliabilityOptions reliability;  // t_std = 0.1 m (W)
+  CoarseOptions coarse;            // method: kEpnp (W) or k3d
   FineMethod fine = FineMethod::kDense;
   IcpOptions keypoint_icp;
   DenseIcpOptions dense_icp;
@@ -56,8 +56,8 @@ struct RegisterOptions {
   // Loop check (beyond W): each scan is also registered to its best other neighbour; a loop that
   // does not close within these tolerances fails both links (wrong links on repeated façades).
   bool verify_loops = true;
-  bool verify_all_links = false;     // false: only weak links are checked (global registration checks all)
-  int min_check_matches = 20;        // a neighbour needs this many matches to serve as a check
+  bool verify_all_links = false;  // false: only weak links are checked (global registration checks all)
+  int min_check_matches = 20;     // a neighbour needs this many matches to serve as a check
   double loop_tolerance_m = 0.10;
   double loop_tolerance_rad = 0.5 * M_PI / 180.0;
   // Global registration (issue 4): a pose graph over every accepted link (tree + loop checks),
@@ -70,7 +70,11 @@ struct RegisterOptions {
   // --coarse none: no features; refine from the scans' current world_from_scan (a .conf file, a
   // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h).
   bool from_current_poses = false;
-  std::optional<std::string> root;   // scan name; default: tail of the heaviest edge
+  // Scans whose pose was imported (io::ProjectScan::imported_pose) keep it: they anchor the
+  // registration and the other scans are placed relative to them. Otherwise imported poses are
+  // re-estimated (with from_current_poses, refined from where they are).
+  bool keep_imported = false;
+  std::optional<std::string> root;          // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
   Status Validate() const;
 };

@@ -10,7 +10,6 @@
 #include "core/common/log.h"
 #include "core/features/confusion.h"
 #include "core/features/feature_cache.h"
-#include "core/geometry/transform.h"
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
 #include "core/pipeline/global_registration.h"
@@ -82,7 +81,8 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                             const RegisterOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
-  if (options.from_current_poses) return RegisterFromCurrentPoses(scans, parent_override, rejected, options, progress, cancel);
+  if (options.from_current_poses)
+    return RegisterFromCurrentPoses(scans, parent_override, rejected, options, progress, cancel);
   const int n = static_cast<int>(scans.size());
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
   for (const Scan& s : scans) {
@@ -134,10 +134,10 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     if (it != done.end()) return it->second;
     progress.Report(0.5 + 0.5 * std::min<double>(done.size(), 2.0 * (n - 1)) / (2.0 * (n - 1)),
                     "registering " + scans[child].name + " to " + scans[parent].name);
-    PairResult& r = done.emplace(std::make_pair(parent, child),
-                                 RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child),
-                                              options, cancel))
-                        .first->second;
+    PairResult& r =
+        done.emplace(std::make_pair(parent, child),
+                     RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child), options, cancel))
+            .first->second;
     LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(r.link.status) +
             (r.link.reason.empty() ? "" : " (" + r.link.reason + ")"));
     return r;
@@ -266,8 +266,8 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     if (!overrides[i] || result.scans[i].registered) continue;
     auto it = done.find({*overrides[i], i});
     result.scans[i].reason = it != done.end()
-                                 ? "the link to its parent override " + scans[*overrides[i]].name +
-                                       " failed (" + it->second.link.reason + "); remove or change the override"
+                                 ? "the link to its parent override " + scans[*overrides[i]].name + " failed (" +
+                                       it->second.link.reason + "); remove or change the override"
                                  : "its parent override " + scans[*overrides[i]].name + " is not registered";
   }
   result.seconds_total = Since(t_start);
@@ -318,10 +318,54 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
   for (const io::LinkRecord& l : project.links)
     if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
   if (!options.root && project.root) options.root = project.root;
+  std::vector<bool> anchor(project.scans.size(), false);
+  int anchors = 0;
+  for (std::size_t i = 0; i < project.scans.size(); ++i)
+    anchors += anchor[i] = options.keep_imported && project.scans[i].registered && project.scans[i].imported_pose;
+  if (anchors > 0) {  // the datum is an imported pose: the root must be one
+    const int root = options.root ? project.FindScan(*options.root) : -1;
+    if (root < 0 || !anchor[root]) {
+      const int first = static_cast<int>(std::find(anchor.begin(), anchor.end(), true) - anchor.begin());
+      options.root = project.scans[first].name;
+    }
+  }
   Expected<ProjectRegistration> result = RegisterScans(scans, overrides, rejected, options, progress, cancel);
   if (!result) return result.error();
+  if (anchors > 0) KeepImportedPoses(project, anchor, &*result);
+  const io::Project before = project;
   ApplyRegistration(*result, project);
+  for (std::size_t i = 0; i < project.scans.size(); ++i) {
+    io::ProjectScan& ps = project.scans[i];
+    const io::ProjectScan& old = before.scans[i];
+    if (ps.registered && !anchor[i]) ps.imported_pose = false;    // re-estimated
+    if (!ps.registered && old.registered && old.imported_pose) {  // the file's pose is not thrown away
+      LogWarning("scan '" + ps.name + "' could not be registered (" + ps.unregistered_reason +
+                 "); it keeps its imported pose");
+      ps.registered = ps.imported_pose = true;
+      ps.world_from_scan = old.world_from_scan;
+    }
+  }
   return result;
+}
+
+void KeepImportedPoses(const io::Project& project, const std::vector<bool>& anchor, ProjectRegistration* result) {
+  std::vector<Eigen::Isometry3d> estimated;
+  for (const ScanRegistration& s : result->scans) estimated.push_back(s.world_from_scan);
+  for (std::size_t i = 0; i < result->scans.size(); ++i) {
+    ScanRegistration& s = result->scans[i];
+    if (anchor[i]) {
+      s.world_from_scan = project.scans[i].world_from_scan;
+      s.registered = true;
+      s.reason.clear();
+      continue;
+    }
+    if (!s.registered) continue;
+    int a = s.parent;
+    for (int steps = 0; a >= 0 && !anchor[a] && steps < static_cast<int>(anchor.size()); ++steps)
+      a = result->scans[a].parent;
+    if (a < 0 || !anchor[a]) continue;  // the root is an anchor, so only a broken tree gets here
+    s.world_from_scan = project.scans[a].world_from_scan * estimated[a].inverse() * estimated[i];
+  }
 }
 
 std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans) {

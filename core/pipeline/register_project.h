@@ -52,8 +52,8 @@ std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int chil
 // when they name a scan not in the list). Errors name an unknown root or parent override.
 struct ScanOrderChoices {
   std::optional<int> root;
-  std::vector<std::optional<int>> overrides;      // one per scan
-  std::vector<std::pair<int, int>> excluded;      // (parent, child)
+  std::vector<std::optional<int>> overrides;  // one per scan
+  std::vector<std::pair<int, int>> excluded;  // (parent, child)
 };
 Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans,
                                                    const std::vector<std::optional<std::string>>& parent_override,
@@ -77,13 +77,18 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
                                                    RegisterOptions options, ProgressSink& progress,
                                                    const CancelToken& cancel);
 
+// options.keep_imported: the project's imported poses are anchors. Each other registered scan is
+// placed from its nearest anchor up the scan order (its pose relative to that anchor as registered);
+// the anchors keep their poses. RegisterProjectScans calls this.
+void KeepImportedPoses(const io::Project& project, const std::vector<bool>& anchor, ProjectRegistration* result);
+
 // Error of a registered pose against the reference, both taken relative to the root (so the
 // datum of the registration does not matter).
 struct ReferenceError {
   bool available = false;
-  double position_m = 0, angle_rad = 0;                 // after fine
+  double position_m = 0, angle_rad = 0;  // after fine
   bool has_coarse = false;
-  double coarse_position_m = 0, coarse_angle_rad = 0;   // after coarse
+  double coarse_position_m = 0, coarse_angle_rad = 0;  // after coarse
 };
 std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans);
 // The same for a saved project (its poses, coarse poses and reference poses); none without a root.

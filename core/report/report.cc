@@ -7,13 +7,13 @@
 #include "core/common/atomic_file.h"
 #include "core/geometry/pose_angles.h"
 #include "core/geometry/transform.h"
+#include "core/io/project_tree.h"
 #include "core/pipeline/register_project.h"
 #include "core/report/canvas.h"
 #include "core/report/confusion_image.h"
 #include "core/report/error_chart.h"
 #include "core/report/html_table.h"
 #include "core/report/network_image.h"
-#include "core/io/project_tree.h"
 
 namespace scanreg::report {
 namespace {
@@ -60,8 +60,8 @@ std::string Matrix(const Eigen::Isometry3d& t) {
 }
 
 std::string SummarySection(const io::Project& p) {
-  int registered = 0, tree_ok = 0, tree_weak = 0, failed = 0, checks = 0;
-  for (const io::ProjectScan& s : p.scans) registered += s.registered;
+  int registered = 0, imported = 0, tree_ok = 0, tree_weak = 0, failed = 0, checks = 0;
+  for (const io::ProjectScan& s : p.scans) registered += s.registered, imported += s.registered && s.imported_pose;
   for (const io::LinkRecord& l : p.links) {
     if (l.loop_check) {
       ++checks;
@@ -83,6 +83,7 @@ std::string SummarySection(const io::Project& p) {
   t.AddRow({"project file", Escape(p.file.string())});
   t.AddRow({"scans", std::to_string(p.scans.size())});
   t.AddRow({"registered", std::to_string(registered)});
+  if (imported > 0) t.AddRow({"of which imported poses (from files)", std::to_string(imported)});
   t.AddRow({"not registered", std::to_string(p.scans.size() - registered)});
   t.AddRow({"root (scan-order start)", Escape(p.root.value_or("(not set)"))});
   t.AddRow({"tree links ok / weak", std::to_string(tree_ok) + " / " + std::to_string(tree_weak)});
@@ -169,10 +170,13 @@ std::string PosesSection(const io::Project& p) {
     std::string status = s.registered ? (p.root && *p.root == s.name ? "root" : "registered") : "not registered";
     if (!s.registered && !s.unregistered_reason.empty()) status += ": " + s.unregistered_reason;
     if (s.registered && s.manual_pose) status = "placed by hand (no link evidence)";
+    if (s.registered && !s.manual_pose && s.imported_pose) status = "imported from a file (no link evidence)";
     t.AddRow({Escape(s.name), Escape(status), Fixed(x.x(), 4), Fixed(x.y(), 4), Fixed(x.z(), 4),
               Fixed(a.heading * kDeg, 4), Fixed(a.pitch * kDeg, 4), Fixed(a.roll * kDeg, 4),
               Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan)},
-             !s.registered ? "failed" : s.manual_pose ? "weak" : "ok");
+             !s.registered                      ? "failed"
+             : s.manual_pose || s.imported_pose ? "weak"
+                                                : "ok");
   }
   return html + t.Html();
 }

@@ -78,14 +78,34 @@ TEST(CliExport, ExportedPosesReadBackEqualInEveryFormat) {
   ASSERT_EQ(RunCli("export-poses " + p + " --format json --out " + Quote(dir / "poses.json")).status, 0);
   RunResult txt = RunCli("export-poses " + p + " --format txt --out " + Quote(dir / "txt"));
   ASSERT_EQ(txt.status, 0) << txt.output;
-  EXPECT_NE(txt.output.find("1 of 3 scans are not registered"), std::string::npos) << txt.output;
+  // The unregistered far station is left out, and named: no identity matrix another program would
+  // place at the origin.
+  EXPECT_NE(txt.output.find("1 of 3 scans are not registered (s03)"), std::string::npos) << txt.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "txt" / "s03.txt"));
+  EXPECT_EQ(ReadBytes(dir / "poses.csv").find("s03"), std::string::npos);
+  EXPECT_EQ(ReadBytes(dir / "poses.json").find("s03"), std::string::npos);
+  // With --include-unregistered it is listed, flagged, without a pose; the readers skip it.
+  RunResult flagged =
+      RunCli("export-poses " + p + " --format csv --include-unregistered --out " + Quote(dir / "all.csv"));
+  ASSERT_EQ(flagged.status, 0) << flagged.output;
+  EXPECT_NE(ReadBytes(dir / "all.csv").find("\ns03,,,,,,,unregistered\n"), std::string::npos)
+      << ReadBytes(dir / "all.csv");
+  ASSERT_EQ(
+      RunCli("export-poses " + p + " --format json --include-unregistered --out " + Quote(dir / "all.json")).status, 0);
+  EXPECT_NE(ReadBytes(dir / "all.json").find("{\"scan\": \"s03\", \"status\": \"unregistered\"}"), std::string::npos)
+      << ReadBytes(dir / "all.json");
   auto csv = io::ReadPosesCsv(dir / "poses.csv");
   ASSERT_TRUE(csv.ok()) << csv.error().ToString();
   auto json = io::ReadPosesJson(dir / "poses.json");
   ASSERT_TRUE(json.ok()) << json.error().ToString();
-  ASSERT_EQ(csv->size(), 3u);
-  ASSERT_EQ(json->size(), 3u);
-  for (int i = 0; i < 3; ++i) {
+  ASSERT_EQ(csv->size(), 2u);
+  ASSERT_EQ(json->size(), 2u);
+  for (const char* name : {"all.csv", "all.json"}) {
+    auto all = std::string(name) == "all.csv" ? io::ReadPosesCsv(dir / name) : io::ReadPosesJson(dir / name);
+    ASSERT_TRUE(all.ok()) << all.error().ToString();
+    EXPECT_EQ(all->size(), 2u) << name;
+  }
+  for (int i = 0; i < 2; ++i) {
     const io::ProjectScan& s = project->scans[i];
     EXPECT_EQ((*csv)[i].scan, s.name);
     EXPECT_LT(MaxDifference((*csv)[i].world_from_scan, s.world_from_scan), 1e-12) << s.name;
@@ -120,11 +140,13 @@ TEST(CliExport, ExportCloudsWritesRegisteredScansAndSkipsTheOthers) {
   const Eigen::Isometry3d truth = *project->scans[1].reference_world_from_scan;
   double worst = 0;
   for (std::size_t k = 0; k < o.size(); ++k)
-    if (o.valid[k]) worst = std::max(worst, (a.points[k].cast<double>() - truth * o.points[k].cast<double>()).norm());
+    if (o.valid[k])
+      worst =
+          std::max(worst, (a.world_from_scan * a.points[k].cast<double>() - truth * o.points[k].cast<double>()).norm());
   EXPECT_LT(worst, 1e-4) << "metres from where the true pose puts the points";
-  RunResult bad = RunCli("export-clouds " + Quote(project_file) + " --format las --out " + Quote(dir / "d"));
+  RunResult bad = RunCli("export-clouds " + Quote(project_file) + " --format xyz --out " + Quote(dir / "d"));
   EXPECT_EQ(bad.status, 2);
-  EXPECT_NE(bad.output.find("ptx, e57 or ply"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("ptx, e57, ply or las"), std::string::npos) << bad.output;
 }
 
 // Every command of `scanreg-cli --help` has a section in the man page, and every option of each

@@ -10,6 +10,7 @@
 namespace scanreg::io {
 namespace {
 
+using test::ReadBytes;
 using test::TempDir;
 using test::WriteBytes;
 
@@ -44,13 +45,33 @@ TEST(PoseCsv, ColumnsAreThePositionAndTheAnglesInDegrees) {
   std::string header, row;
   std::getline(in, header);
   std::getline(in, row);
-  EXPECT_EQ(header, "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg");
+  EXPECT_EQ(header, "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,status");
   double x, y, z, h, p, r;
   ASSERT_EQ(std::sscanf(row.c_str(), "a,%lf,%lf,%lf,%lf,%lf,%lf", &x, &y, &z, &h, &p, &r), 6) << row;
   EXPECT_DOUBLE_EQ(x, 1);
   EXPECT_DOUBLE_EQ(z, 3);
   EXPECT_NEAR(h, 30, 1e-9);
   EXPECT_NEAR(p, 0, 1e-9);
+}
+
+TEST(PoseCsv, StatusColumnRoundTripsAndUnregisteredRowsCarryNoPose) {
+  TempDir dir;
+  NamedPose a{"s01", Eigen::Isometry3d::Identity(), "imported"};
+  a.world_from_scan.translation() = Eigen::Vector3d(500000.125, 5000000.25, 99.5);
+  const NamedPose b{"s02", Eigen::Isometry3d::Identity(), kUnregisteredStatus};
+  ASSERT_TRUE(WritePosesCsv(dir / "p.csv", {a, b}).ok());
+  const std::string text = ReadBytes(dir / "p.csv");
+  EXPECT_NE(text.find("s02,,,,,,,unregistered\n"), std::string::npos) << text;
+  Expected<std::vector<NamedPose>> back = ReadPosesCsv(dir / "p.csv");
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_EQ(back->size(), 1u);
+  EXPECT_EQ((*back)[0].status, "imported");
+  EXPECT_EQ((*back)[0].world_from_scan.translation(), a.world_from_scan.translation());
+  // Files written before the status column are still read.
+  WriteBytes(dir / "old.csv", "scan,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg\ns01,1,2,3,0,0,0\n");
+  Expected<std::vector<NamedPose>> old = ReadPosesCsv(dir / "old.csv");
+  ASSERT_TRUE(old.ok()) << old.error().message;
+  EXPECT_EQ((*old)[0].world_from_scan.translation(), Eigen::Vector3d(1, 2, 3));
 }
 
 TEST(PoseCsv, MalformedFilesNameTheLine) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/common/log.h"
+
 #include "tests/io/io_test_util.h"
 #include "tests/support/test_paths.h"
 
@@ -48,10 +50,25 @@ TEST(PoseFile, BunConfErrorsNameTheLine) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("tok.conf, line 1: 'zero'"), std::string::npos) << r.error().message;
 
-  WriteBytes(dir / "kw.conf", "\nmesh a.ply 0 0 0 0 0 0 1\n");
+  // The dragon's .conf has a `mesh` line (its reconstruction) beside the scans' `bmesh` lines: skipped,
+  // with a warning naming the line.
+  std::string warning;
+  SetLogHandler([&](LogLevel level, const std::string& m) {
+    if (level == LogLevel::kWarning) warning += m;
+  });
+  WriteBytes(dir / "kw.conf",
+             "camera 0 0 0 0 0 0 1\nmesh ../reconstruction/dragon_vrip.ply 0 0 0 0 0 0 1\n"
+             "bmesh dragonStandRight_0.ply 1 2 3 0 0 0 1\n");
   r = ReadBunConf(dir / "kw.conf");
-  ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("kw.conf, line 2:"), std::string::npos) << r.error().message;
+  SetLogHandler({});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->size(), 1u);
+  EXPECT_EQ((*r)[0].scan, "dragonStandRight_0.ply");
+  EXPECT_NEAR((*r)[0].world_from_scan.translation().y(), 2.0, 1e-12);
+  EXPECT_NE(warning.find("kw.conf, line 2:"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("'mesh'"), std::string::npos) << warning;
+  WriteBytes(dir / "only_mesh.conf", "mesh a.ply 0 0 0 0 0 0 1\n");
+  EXPECT_FALSE(ReadBunConf(dir / "only_mesh.conf").ok()) << "no scan pose at all is still an error";
 
   WriteBytes(dir / "zero.conf", "bmesh a.ply 0 0 0 0 0 0 0\n");
   EXPECT_FALSE(ReadBunConf(dir / "zero.conf").ok());

@@ -14,10 +14,10 @@ namespace {
 std::vector<Scan> TwoSpheres() {
   // Scan 0 sees a sphere at the origin, scan 1 one 5 m away (unregistered in the test).
   std::vector<Scan> scans;
-  scans.push_back(test::MakeWindowScan(test::SphereCaster({0, 0, 0}, 0.3), {2, 0, 0}, {0, 0, 0}, 60, 60, 0.2, 0.005,
-                                       1, "near"));
-  scans.push_back(test::MakeWindowScan(test::SphereCaster({5, 5, 0}, 0.3), {7, 5, 0}, {5, 5, 0}, 60, 60, 0.2, 0.005,
-                                       2, "far"));
+  scans.push_back(
+      test::MakeWindowScan(test::SphereCaster({0, 0, 0}, 0.3), {2, 0, 0}, {0, 0, 0}, 60, 60, 0.2, 0.005, 1, "near"));
+  scans.push_back(
+      test::MakeWindowScan(test::SphereCaster({5, 5, 0}, 0.3), {7, 5, 0}, {5, 5, 0}, 60, 60, 0.2, 0.005, 2, "far"));
   return scans;
 }
 
@@ -48,7 +48,7 @@ TEST(MergeScansPipeline, MergesOnlySelectedScansAndWrites) {
     if (line.rfind("element vertex ", 0) == 0) vertices = std::stol(line.substr(15));
   }
   EXPECT_EQ(vertices, long(result->mesh.vertices.size()));
-  EXPECT_EQ(std::filesystem::file_size(dir / "points.ply"), std::size_t(in.tellg()) + 12 * vertices);
+  EXPECT_EQ(std::filesystem::file_size(dir / "points.ply"), std::size_t(in.tellg()) + 24 * vertices);  // double x y z
   const Status xyz = WritePoints(dir / "points.xyz", result->mesh);
   ASSERT_FALSE(xyz);
   EXPECT_NE(xyz.error().message.find(".ply"), std::string::npos);
@@ -83,7 +83,7 @@ TEST(MergeScansPipeline, ErrorsNameTheProblem) {
   options.voxel_m = -0.01;
   auto bad = MergeScans(scans, {}, options, progress, cancel);
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("--voxel"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("voxel size"), std::string::npos) << bad.error().message;
   options.voxel_m = 0.02;
   auto none = MergeScans(scans, {false, false}, options, progress, cancel);
   ASSERT_FALSE(none);

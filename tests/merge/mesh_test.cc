@@ -10,6 +10,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "core/common/log.h"
 #include "core/merge/marching_cubes.h"
 #include "core/merge/mesh.h"
 #include "core/merge/mesh_io.h"
@@ -83,8 +84,9 @@ std::string ReadAll(const std::filesystem::path& p) {
   return ss.str();
 }
 
-// Binary PLY: (vertices, faces) from the header, checking the body's size and indices.
-std::pair<std::size_t, std::size_t> ReadPlyCounts(const std::filesystem::path& p, Eigen::Vector3d* origin) {
+// Binary PLY of double vertices: (vertices, faces) from the header, checking the body's size and
+// indices; *first is the first vertex.
+std::pair<std::size_t, std::size_t> ReadPlyCounts(const std::filesystem::path& p, Eigen::Vector3d* first) {
   const std::string s = ReadAll(p);
   const std::size_t end = s.find("end_header\n");
   if (end == std::string::npos) return {0, 0};
@@ -97,12 +99,12 @@ std::pair<std::size_t, std::size_t> ReadPlyCounts(const std::filesystem::path& p
     l >> a >> b;
     if (a == "element" && b == "vertex") l >> nv;
     if (a == "element" && b == "face") l >> nf;
-    if (a == "comment" && b == "scanreg_origin") l >> origin->x() >> origin->y() >> origin->z();
   }
   const std::size_t body = s.size() - end - 11;
-  if (body != nv * 12 + nf * 13) return {0, 0};
+  if (body != nv * 24 + nf * 13) return {0, 0};
+  if (nv > 0) std::memcpy(first->data(), s.data() + end + 11, 24);
   for (std::size_t f = 0; f < nf; ++f) {
-    const char* rec = s.data() + end + 11 + nv * 12 + f * 13;
+    const char* rec = s.data() + end + 11 + nv * 24 + f * 13;
     if (rec[0] != 3) return {0, 0};
     for (int k = 0; k < 3; ++k) {
       std::int32_t idx;
@@ -152,24 +154,41 @@ TEST(MeshIo, ExportsReReadWithIdenticalCounts) {
   std::set<std::tuple<float, float, float>> distinct;
   for (const auto& v : mesh.vertices) distinct.insert({v.x(), v.y(), v.z()});
   test::TempDir dir;
+  int stl_warnings = 0;
+  SetLogHandler([&](LogLevel level, const std::string& message) {
+    stl_warnings += level == LogLevel::kWarning && message.find("32-bit floats") != std::string::npos;
+  });
   ASSERT_TRUE(WriteMeshFile(dir / "m.ply", mesh));
   ASSERT_TRUE(WriteMeshFile(dir / "m.OBJ", mesh));
   ASSERT_TRUE(WriteMeshFile(dir / "m.stl", mesh));
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero(), first = Eigen::Vector3d::Zero();
-  EXPECT_EQ(ReadPlyCounts(dir / "m.ply", &origin), std::make_pair(mesh.vertices.size(), mesh.triangles.size()));
-  EXPECT_NEAR((origin - mesh.origin).norm(), 0.0, 1e-6);
+  const Eigen::Vector3d world0 = mesh.origin + mesh.vertices[0].cast<double>();
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  EXPECT_EQ(ReadPlyCounts(dir / "m.ply", &first), std::make_pair(mesh.vertices.size(), mesh.triangles.size()));
+  EXPECT_NEAR((first - world0).norm(), 0.0, 1e-9);
   EXPECT_EQ(ReadObjCounts(dir / "m.OBJ", &first), std::make_pair(mesh.vertices.size(), mesh.triangles.size()));
-  EXPECT_NEAR((first - (mesh.origin + mesh.vertices[0].cast<double>())).norm(), 0.0, 1e-5);  // absolute, UTM-sized
-  EXPECT_EQ(ReadStlCounts(dir / "m.stl"), std::make_pair(distinct.size(), mesh.triangles.size()));
+  EXPECT_NEAR((first - world0).norm(), 0.0, 1e-5);  // absolute, UTM-sized
+  // STL holds floats: 4,000 km from the origin the world coordinates round by decimetres, which a
+  // warning says; the triangles are all there.
+  EXPECT_EQ(ReadStlCounts(dir / "m.stl").second, mesh.triangles.size());
+  EXPECT_EQ(stl_warnings, 1);
+  Mesh near = mesh;
+  near.origin = Eigen::Vector3d(24.0, -8.0, 0.0);  // demo-sized: no warning, every vertex distinct
+  ASSERT_TRUE(WriteMeshFile(dir / "near.stl", near));
+  const auto near_counts = ReadStlCounts(dir / "near.stl");
+  EXPECT_EQ(near_counts.second, mesh.triangles.size());
+  EXPECT_GE(near_counts.first, distinct.size() * 98 / 100);  // a few near-duplicate corners meet at float steps
+  EXPECT_EQ(stl_warnings, 1);
   ASSERT_TRUE(WritePointCloudPly(dir / "p.ply", mesh.origin, mesh.vertices));
-  EXPECT_EQ(ReadPlyCounts(dir / "p.ply", &origin), std::make_pair(mesh.vertices.size(), std::size_t(0)));
+  EXPECT_EQ(ReadPlyCounts(dir / "p.ply", &first), std::make_pair(mesh.vertices.size(), std::size_t(0)));
+  EXPECT_NEAR((first - world0).norm(), 0.0, 1e-9);
   const Status bad = WriteMeshFile(dir / "m.xyz", mesh);
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().message.find(".ply, .obj or .stl"), std::string::npos);
   // Only the four requested files: no temporary left behind.
   int files = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
-  EXPECT_EQ(files, 4);
+  EXPECT_EQ(files, 5);
+  SetLogHandler({});
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // unique names, poses from the files, the project unchanged on error.
 #include <gtest/gtest.h>
 
+#include "core/io/pose_csv.h"
 #include "core/io/ptx.h"
 #include "core/pipeline/create_project.h"
 #include "tests/support/test_paths.h"
@@ -84,6 +85,68 @@ TEST(CreateProject, SavesTheProjectWithEveryScan) {
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   ASSERT_EQ(loaded->scans.size(), 4u);
   EXPECT_EQ(loaded->scans[3].name, "ab_2_2");
+}
+
+// A pose read from a file is used as it is: the scan is 'imported' (registered, no link evidence).
+TEST(CreateProject, EveryPoseFormatExportPosesWritesIsImported) {
+  test::TempDir dir;
+  Scan a = PlaneScan("a", 0.0), b = PlaneScan("b", 0.0);
+  a.world_from_scan = b.world_from_scan = Eigen::Isometry3d::Identity();
+  const auto file_a = WritePtxFile(dir, "a.ptx", {a});
+  const auto file_b = WritePtxFile(dir, "b.ptx", {b});
+  Eigen::Isometry3d pose_b = Eigen::Isometry3d::Identity();
+  pose_b.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pose_b.translation() = Eigen::Vector3d(500012.5, 4999990.25, 101.0);
+  const std::vector<io::NamedPose> poses = {{"a", Eigen::Isometry3d::Identity(), ""}, {"b", pose_b, "registered"}};
+  ASSERT_TRUE(io::WritePosesJson(dir / "p.json", poses).ok());
+  ASSERT_TRUE(io::WritePosesCsv(dir / "p.csv", poses).ok());
+  std::filesystem::create_directories(dir / "txt");
+  for (const io::NamedPose& p : poses)
+    ASSERT_TRUE(io::WriteMatrixTxt(dir / "txt" / (p.scan + ".txt"), p.world_from_scan).ok());
+  for (const std::string pose_file : {"p.json", "p.csv", "txt", "txt/b.txt"}) {
+    SCOPED_TRACE(pose_file);
+    CreateProjectOptions options;
+    options.scan_files = {file_a, file_b};
+    options.poses = dir / pose_file;
+    NullProgress progress;
+    auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
+    ASSERT_TRUE(project.ok()) << project.error().message;
+    auto loaded = io::LoadProject(dir / "p.scanreg.json");
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    const io::ProjectScan& sb = loaded->scans[1];
+    EXPECT_EQ(io::ScanPoseState(sb), io::PoseState::kImported);
+    EXPECT_LT((sb.world_from_scan.matrix() - pose_b.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    const bool a_listed = pose_file != "txt/b.txt";
+    EXPECT_EQ(io::ScanPoseState(loaded->scans[0]), a_listed ? io::PoseState::kImported : io::PoseState::kUnregistered);
+  }
+  CreateProjectOptions bad;
+  bad.scan_files = {file_a};
+  bad.poses = dir / "p.xyz";
+  NullProgress progress;
+  auto refused = CreateProject(dir / "q.scanreg.json", bad, progress, CancelToken());
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find(".csv"), std::string::npos) << refused.error().message;
+}
+
+TEST(CreateProject, HeaderPosesAreImportedAndASingleScanIsInPlace) {
+  test::TempDir dir;
+  Scan placed = PlaneScan("placed", 7.0);  // a registered pose in the PTX header (another program's)
+  Scan raw = PlaneScan("raw", 0.0);
+  raw.world_from_scan = Eigen::Isometry3d::Identity();
+  const auto file = WritePtxFile(dir, "two.ptx", {placed, raw});
+  NullProgress progress;
+  CreateProjectOptions options;
+  options.scan_files = {file};
+  auto two = CreateProject(dir / "two.scanreg.json", options, progress, CancelToken());
+  ASSERT_TRUE(two.ok()) << two.error().message;
+  EXPECT_EQ(io::ScanPoseState(two->scans[0]), io::PoseState::kImported);
+  EXPECT_EQ(io::ScanPoseState(two->scans[1]), io::PoseState::kUnregistered);
+  // One scan alone is its own frame: usable by merge and export without registration.
+  options.scan_files = {WritePtxFile(dir, "one.ptx", {raw})};
+  auto one = CreateProject(dir / "one.scanreg.json", options, progress, CancelToken());
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  ASSERT_EQ(one->scans.size(), 1u);
+  EXPECT_EQ(io::ScanPoseState(one->scans[0]), io::PoseState::kRegistered);
 }
 
 }  // namespace

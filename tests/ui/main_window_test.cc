@@ -1,28 +1,33 @@
 // Drives the real main window under Xvfb: menus, the 3D view, the demo project loaded and
 // registered on the worker thread, cancel, save.
+#include <QVTKOpenGLNativeWidget.h>
+#include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
+#include <QLineEdit>
 #include <QMenuBar>
 #include <QMessageBox>
-#include <QUndoStack>
 #include <QSignalSpy>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
-#include <QVTKOpenGLNativeWidget.h>
+#include <QUndoStack>
 #include <QtTest/QtTest>
 
 #include "core/io/project.h"
 #include "core/io/project_tree.h"
+#include "core/pipeline/create_project.h"
+#include "core/pipeline/register_settings.h"
 #include "tests/ui/wait_for_job.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/network_panel.h"
 #include "ui/pose_dialog.h"
 #include "ui/project_panels.h"
+#include "ui/register_settings_dialog.h"
 #include "ui/view_3d.h"
 
-using scanreg::ui::JobRunner;
 using scanreg::test::WaitForJob;
+using scanreg::ui::JobRunner;
 using scanreg::ui::MainWindow;
 
 class MainWindowTest : public QObject {
@@ -69,6 +74,62 @@ class MainWindowTest : public QObject {
     auto* box = window.findChild<QMessageBox*>("ErrorDialog");
     QVERIFY(box != nullptr);
     QVERIFY2(box->text().contains("broken.scanreg.json"), qPrintable(box->text()));
+  }
+
+  // The project's saved registration settings are what a re-run from the GUI uses; the settings
+  // dialog shows them and stores an edit in the project (undoable).
+  void RegistrationUsesAndEditsTheProjectsSavedSettings() {
+    QTemporaryDir dir;
+    scanreg::SimulatedProjectOptions sim;
+    sim.stations = 2;
+    sim.scanner.cols = 200;
+    sim.scanner.rows = 50;
+    scanreg::NullProgress progress;
+    auto project = scanreg::pipeline::WriteSimulatedProject(sim, dir.filePath("p").toStdString(), progress,
+                                                            scanreg::CancelToken());
+    QVERIFY(project.ok());
+    scanreg::pipeline::RegisterOptions saved;
+    saved.from_current_poses = true;
+    saved.fine = scanreg::pipeline::FineMethod::kEm;
+    saved.range_sigma_m = 0.0005;
+    saved.overlap_distance_m = 0.01;
+    scanreg::pipeline::StoreRegisterSettings(saved, &project->settings);
+    QVERIFY(scanreg::io::SaveProject(*project, project->file).ok());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(QString::fromStdString(project->file.string())));
+    QVERIFY(WaitForJob(window, 120000));
+    const scanreg::pipeline::RegisterOptions used = window.RegistrationOptions();
+    QVERIFY(used.from_current_poses);
+    QVERIFY(used.fine == scanreg::pipeline::FineMethod::kEm);
+    QCOMPARE(used.range_sigma_m, 0.0005);
+    QCOMPARE(used.overlap_distance_m, 0.01);
+
+    scanreg::ui::RegisterSettingsDialog* dialog = window.EditRegisterSettings();
+    QVERIFY(dialog != nullptr);
+    const auto& settings = scanreg::pipeline::RegisterSettings();
+    int fine = -1, noise = -1;
+    for (std::size_t i = 0; i < settings.size(); ++i) {
+      if (std::string(settings[i].key) == "register.fine") fine = int(i);
+      if (std::string(settings[i].key) == "register.noise_m") noise = int(i);
+    }
+    auto* fine_box = qobject_cast<QComboBox*>(dialog->field(fine));
+    auto* noise_edit = qobject_cast<QLineEdit*>(dialog->field(noise));
+    QVERIFY(fine_box && noise_edit);
+    QCOMPARE(fine_box->currentText(), QString("em"));
+    QCOMPARE(noise_edit->text().toDouble(), 0.0005);
+    noise_edit->setText("lots");  // refused with the setting named; the dialog stays open
+    dialog->accept();
+    QVERIFY(dialog->isVisible());
+    QCOMPARE(std::stod(window.project().settings.at("register.noise_m")), 0.0005);
+    fine_box->setCurrentText("projective-icp");
+    noise_edit->setText("0.002");
+    dialog->accept();
+    QCOMPARE(window.project().settings.at("register.fine"), std::string("projective-icp"));
+    QCOMPARE(window.RegistrationOptions().range_sigma_m, 0.002);
+    QVERIFY(window.dirty());
+    window.undoStack()->undo();
+    QCOMPARE(window.project().settings.at("register.fine"), std::string("em"));
   }
 
   void DemoProjectLoadsRegistersCancelsAndSaves() {
@@ -136,8 +197,7 @@ class MainWindowTest : public QObject {
 
     // The confusion matrix is shown in scan order: the root first, then as the scans were placed.
     const std::vector<int> order = scanreg::io::OrderedScanIndices(window.project());
-    QCOMPARE(window.confusionPanel()->horizontalHeaderItem(0)->text(),
-             QString::fromStdString(*window.project().root));
+    QCOMPARE(window.confusionPanel()->horizontalHeaderItem(0)->text(), QString::fromStdString(*window.project().root));
     for (int i = 0; i < 5; ++i)
       QCOMPARE(window.confusionPanel()->item(i, 0)->text().toInt(), window.confusion()(order[i], order[0]));
 

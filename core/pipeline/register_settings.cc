@@ -1,0 +1,141 @@
+#include "core/pipeline/register_settings.h"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "core/io/text_parse.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+std::string Number(double v) {
+  char buf[32];
+  return std::string(buf, io::AppendNumber(buf, v));
+}
+
+bool ParseDouble(const std::string& text, double* out) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  *out = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(*out);
+}
+
+std::string Join(const std::vector<std::string>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? (i + 1 == v.size() ? " or " : ", ") : "") + v[i];
+  return s;
+}
+
+std::vector<std::string> FineNames() {
+  std::vector<std::string> names;
+  for (FineMethod m : AllFineMethods()) names.push_back(FineMethodName(m));
+  return names;
+}
+
+Status Bad(const RegisterSetting& s, const std::string& value, const std::string& want) {
+  return MakeError(ErrorCode::kInvalidArgument, std::string(s.label) + ": '" + value + "' is not valid; " + want);
+}
+
+Status SetNumber(const RegisterSetting& s, const std::string& value, double lo, double hi, double* out) {
+  double v = 0;
+  if (!ParseDouble(value, &v) || v < lo || v > hi) {
+    return Bad(s, value, "give a number from " + Number(lo) + " to " + Number(hi));
+  }
+  *out = v;
+  return Status::Ok();
+}
+
+}  // namespace
+
+const std::vector<RegisterSetting>& RegisterSettings() {
+  static const std::vector<RegisterSetting> all = {
+      {"register.coarse", "coarse", "coarse method", {"3d", "epnp", "none"}},
+      {"register.fine", "fine", "fine method", FineNames()},
+      {"register.ratio", "ratio", "descriptor ratio t_des", {}},
+      {"register.noise_m", "noise", "range noise (m)", {}},
+      {"register.overlap_distance_m", "overlap-distance", "overlap distance (m)", {}},
+      {"register.global", "global", "global registration", {}, true},
+      {"register.keep_imported", "keep-imported", "keep imported poses fixed", {}, true},
+  };
+  return all;
+}
+
+std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting& s) {
+  const std::string key = s.key;
+  if (key == "register.coarse") return o.from_current_poses ? "none" : CoarseMethodName(o.coarse.method);
+  if (key == "register.fine") return FineMethodName(o.fine);
+  if (key == "register.ratio") return Number(o.match.ratio);
+  if (key == "register.noise_m") return Number(o.range_sigma_m);
+  if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
+  if (key == "register.global") return o.global ? "true" : "false";
+  if (key == "register.keep_imported") return o.keep_imported ? "true" : "false";
+  return "";
+}
+
+Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, RegisterOptions* o) {
+  const std::string key = s.key;
+  if (s.boolean) {
+    if (value != "true" && value != "false") return Bad(s, value, "give true or false");
+    (key == "register.global" ? o->global : o->keep_imported) = value == "true";
+    return Status::Ok();
+  }
+  if (key == "register.coarse") {
+    if (value == "none") {
+      o->from_current_poses = true;
+      return Status::Ok();
+    }
+    for (CoarseMethod m : AllCoarseMethods()) {
+      if (value == CoarseMethodName(m)) {
+        o->coarse.method = m;
+        o->from_current_poses = false;
+        return Status::Ok();
+      }
+    }
+    return Bad(s, value, "choose " + Join(s.choices));
+  }
+  if (key == "register.fine") {
+    for (FineMethod m : AllFineMethods()) {
+      if (value == FineMethodName(m)) {
+        o->fine = m;
+        return Status::Ok();
+      }
+    }
+    return Bad(s, value, "choose " + Join(s.choices));
+  }
+  if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
+  if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
+  if (key == "register.overlap_distance_m") return SetNumber(s, value, 1e-6, 100.0, &o->overlap_distance_m);
+  return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");
+}
+
+Expected<RegisterOptions> RegisterOptionsFromSettings(const std::map<std::string, std::string>& settings,
+                                                      RegisterOptions base) {
+  for (const auto& [key, value] : settings) {
+    if (key.rfind("register.", 0) != 0) continue;
+    const RegisterSetting* setting = nullptr;
+    for (const RegisterSetting& s : RegisterSettings())
+      if (key == s.key) setting = &s;
+    if (!setting) {
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "the project's setting '" + key + "' is not a registration setting of this scanreg");
+    }
+    if (Status st = ApplyRegisterSetting(*setting, value, &base); !st) {
+      return MakeError(st.error().code, "the project's saved " + st.error().message);
+    }
+  }
+  return base;
+}
+
+Expected<RegisterOptions> ProjectRegisterOptions(const io::Project& project) {
+  RegisterOptions defaults;
+  bool all_imported = !project.scans.empty();
+  for (const io::ProjectScan& s : project.scans) all_imported &= s.registered && s.imported_pose;
+  defaults.from_current_poses = all_imported;
+  return RegisterOptionsFromSettings(project.settings, defaults);
+}
+
+void StoreRegisterSettings(const RegisterOptions& options, std::map<std::string, std::string>* settings) {
+  for (const RegisterSetting& s : RegisterSettings()) (*settings)[s.key] = RegisterSettingValue(options, s);
+}
+
+}  // namespace scanreg::pipeline

@@ -1,0 +1,85 @@
+// Imported poses end to end with the real Stanford bunny and its .conf: `new --poses` makes the
+// scans 'imported', merge and export use them without `register`, and `register --keep-imported`
+// leaves them as they are.
+#include <gtest/gtest.h>
+
+#include "core/io/project.h"
+#include "core/io/scan_file.h"
+#include "tests/integration/cli_run.h"
+#include "tests/support/test_paths.h"
+
+namespace scanreg {
+namespace {
+
+using test::Quote;
+using test::ReadBytes;
+using test::RunCli;
+using test::RunResult;
+
+TEST(CliImport, ConfPosesAreImportedMergedExportedAndKept) {
+  SCANREG_REQUIRE_REALDATA(data);
+  const auto bunny = data / "stanford_bunny";
+  test::TempDir dir;
+  const auto project_file = dir / "bunny.scanreg.json";
+  const std::string p = Quote(project_file);
+  RunResult created = RunCli("new " + p + " " + Quote(bunny / "bun000.ply") + " " + Quote(bunny / "bun045.ply") + " " +
+                             Quote(bunny / "bun090.ply") + " --poses " + Quote(bunny / "bun.conf"));
+  ASSERT_EQ(created.status, 0) << created.output;
+  // bun.conf holds all 10 scans: the 7 not in this project are named, not an error.
+  EXPECT_NE(created.output.find("7 pose(s) match no scan of the project"), std::string::npos) << created.output;
+  RunResult info = RunCli("info " + p);
+  ASSERT_EQ(info.status, 0) << info.output;
+  std::size_t imported = 0;
+  for (std::size_t at = info.output.find(" imported "); at != std::string::npos;
+       at = info.output.find(" imported ", at + 1))
+    ++imported;
+  EXPECT_EQ(imported, 3u) << info.output;
+  Expected<io::Project> before = io::LoadProject(project_file);
+  ASSERT_TRUE(before.ok());
+
+  // Merge and export without registering.
+  RunResult merged = RunCli("merge " + p + " --voxel 0.002 --sigma 0.0005 --out " + Quote(dir / "bunny.ply"));
+  ASSERT_EQ(merged.status, 0) << merged.output;
+  EXPECT_NE(merged.output.find("merged 3 of 3 scans"), std::string::npos) << merged.output;
+  RunResult clouds = RunCli("export-clouds " + p + " --format las --out " + Quote(dir / "las"));
+  ASSERT_EQ(clouds.status, 0) << clouds.output;
+  EXPECT_NE(clouds.output.find("exported 3 of 3 scans"), std::string::npos) << clouds.output;
+  EXPECT_EQ(ReadBytes(dir / "las" / "bun045.las").substr(0, 4), "LASF");
+  RunResult poses = RunCli("export-poses " + p + " --format csv --out " + Quote(dir / "poses.csv"));
+  ASSERT_EQ(poses.status, 0) << poses.output;
+  EXPECT_NE(ReadBytes(dir / "poses.csv").find(",imported\n"), std::string::npos);
+
+  // A project made from what export-poses wrote has the same poses.
+  RunResult again =
+      RunCli("new " + Quote(dir / "again.scanreg.json") + " " + Quote(bunny / "bun000.ply") + " " +
+             Quote(bunny / "bun045.ply") + " " + Quote(bunny / "bun090.ply") + " --poses " + Quote(dir / "poses.csv"));
+  ASSERT_EQ(again.status, 0) << again.output;
+  Expected<io::Project> reread = io::LoadProject(dir / "again.scanreg.json");
+  ASSERT_TRUE(reread.ok());
+  for (int i = 0; i < 3; ++i) {
+    // CSV holds angles in degrees: the matrix comes back to rounding (1e-9: a nanometre, a nanoradian).
+    EXPECT_LT(
+        (reread->scans[i].world_from_scan.matrix() - before->scans[i].world_from_scan.matrix()).cwiseAbs().maxCoeff(),
+        1e-9);
+  }
+
+  // --keep-imported: the imported poses stay exactly as they were, and it says so.
+  RunResult kept = RunCli("register " + p + " --keep-imported --fine em --noise 0.0005 --overlap-distance 0.01");
+  EXPECT_EQ(kept.status, 0) << kept.output;
+  EXPECT_NE(kept.output.find("kept fixed"), std::string::npos) << kept.output;
+  Expected<io::Project> after = io::LoadProject(project_file);
+  ASSERT_TRUE(after.ok());
+  for (std::size_t i = 0; i < after->scans.size(); ++i) {
+    EXPECT_LT(
+        (after->scans[i].world_from_scan.matrix() - before->scans[i].world_from_scan.matrix()).cwiseAbs().maxCoeff(),
+        1e-12)
+        << i;
+    EXPECT_EQ(io::ScanPoseState(after->scans[i]), io::PoseState::kImported) << i;
+  }
+  EXPECT_EQ(after->settings.at("register.keep_imported"), "true");
+  EXPECT_EQ(after->settings.at("register.coarse"), "none");  // the pose-based path, chosen for imported poses
+  EXPECT_EQ(std::stod(after->settings.at("register.noise_m")), 0.0005);
+}
+
+}  // namespace
+}  // namespace scanreg
