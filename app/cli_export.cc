@@ -46,10 +46,10 @@ int RunExportClouds(const std::vector<std::string>& argv) {
       ++written;
     }
   }
-  std::printf("exported %d of %zu scans (%s, poses %s)\n", written, exported->size(), options.format.c_str(),
-              pipeline::WorldFormat(options.format) ? "world coordinates, double"
-              : options.apply_poses                 ? "applied to the points"
-                                                    : "kept in the header");
+  std::printf("exported %d of %zu scans (%s, %s)\n", written, exported->size(), options.format.c_str(),
+              pipeline::WorldFormat(options.format) ? "world coordinates in double precision"
+              : options.apply_poses                 ? "poses applied to the points"
+                                                    : "poses kept in the header");
   return 0;
 }
 

@@ -10,6 +10,7 @@
 #include "ui/main_window.h"
 #include "ui/merge_panel.h"
 #include "ui/pair_inspector.h"
+#include "ui/register_settings_dialog.h"
 #include "ui/scan_scene.h"
 #include "ui/view_3d.h"
 
@@ -62,6 +63,14 @@ std::vector<ScreenshotView> ScreenshotViews() {
          if (auto* dock = w.findChild<QDockWidget*>("MergePanelDock")) dock->raise();
        },
        [](MainWindow& w) { return w.Screenshot(); }},
+      {"register_settings.png", "", [](MainWindow& w) { w.EditRegisterSettings(); },
+       [](MainWindow& w) {
+         auto* dialog = w.findChild<RegisterSettingsDialog*>();
+         if (!dialog) return QImage();
+         const QImage image = dialog->grab().toImage();
+         dialog->close();
+         return image;
+       }},
       // The pair view replaces the 3D view's scene: keep it last.
       {"pair_view.png", "",
        [](MainWindow& w) {
