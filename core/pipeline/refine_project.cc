@@ -5,15 +5,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <memory>
 
 #include "core/common/log.h"
 #include "core/pipeline/fine_align.h"
-#include "core/pipeline/global_registration.h"
 #include "core/pipeline/register_pair.h"
+#include "core/pipeline/registration_driver.h"
 #include "core/registration/point_index.h"
-#include "core/registration/scan_order.h"
 #include "core/registration/voxel_filter.h"
 
 namespace scanreg::pipeline {
@@ -149,89 +147,26 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
 
   Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
   if (!choices) return choices.error();
-  std::vector<std::pair<int, int>> excluded = choices->excluded;
-  const int min_weight = std::max(1, static_cast<int>(std::lround(1000 * options.thresholds.min_overlap)));
-
-  // Refine along the maximum-overlap tree; a failed link is excluded and the tree recomputed.
-  const auto t_pairs = std::chrono::steady_clock::now();
-  std::map<std::pair<int, int>, io::LinkRecord> done;
-  auto link = [&](int parent, int child) -> const io::LinkRecord& {
-    auto it = done.find({parent, child});
-    if (it != done.end()) return it->second;
-    progress.Report(0.05 + 0.9 * std::min(1.0, done.size() / (2.0 * n)),
-                    "refining " + scans[child].name + " to " + scans[parent].name);
+  LinkSource source;
+  source.weights = result.confusion;
+  source.min_weight = std::max(1, static_cast<int>(std::lround(1000 * options.thresholds.min_overlap)));
+  source.register_pair = [&](int parent, int child) {
     const Eigen::Isometry3d initial = scans[parent].world_from_scan.inverse() * scans[child].world_from_scan;
-    io::LinkRecord l = RefinePair(prepared[parent], prepared[child], initial, options, cancel);
-    LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(l.status) +
-            (l.reason.empty() ? "" : " (" + l.reason + ")"));
-    return done.emplace(std::make_pair(parent, child), std::move(l)).first->second;
+    PairResult r;
+    r.link = RefinePair(prepared[parent], prepared[child], initial, options, cancel);
+    return r;
   };
-  ScanOrder order;
-  for (int round = 0; round <= n * n; ++round) {
-    Expected<ScanOrder> o = ComputeScanOrder(result.confusion, choices->root, choices->overrides, excluded, min_weight);
-    if (!o) return o.error();
-    order = *o;
-    bool changed = false;
-    for (int child : order.order) {
-      const int parent = order.parent[child];
-      if (parent < 0) continue;
-      if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
-      if (link(parent, child).status == io::LinkStatus::kFailed) {
-        excluded.emplace_back(parent, child);
-        changed = true;
-        break;
-      }
-    }
-    if (!changed) break;
+  source.verb = "refining";
+  source.loop_checks = false;
+  source.overlap = overlap;
+  source.extra_overlap = options.thresholds.weak_overlap;
+  source.has_coarse = false;
+  source.no_link_reason = Format("no scan overlaps it by %.0f %% within %.3f m at the current poses",
+                                 100 * options.thresholds.min_overlap, options.overlap_distance_m);
+  SubProgress pair_progress(progress, 0.05, 0.95);
+  if (Status s = DriveRegistration(scans, *choices, source, options, pair_progress, cancel, &result); !s) {
+    return s.error();
   }
-
-  // World poses chained from the root, which keeps its current pose.
-  result.root = order.root;
-  result.scans.resize(n);
-  for (int i = 0; i < n; ++i) {
-    result.scans[i].name = scans[i].name;
-    result.scans[i].reason = Format("no scan overlaps it by %.0f %% within %.3f m at the current poses",
-                                    100 * options.thresholds.min_overlap, options.overlap_distance_m);
-  }
-  ScanRegistration& r0 = result.scans[order.root];
-  r0.registered = true;
-  r0.reason.clear();
-  r0.world_from_scan = scans[order.root].world_from_scan;
-  for (int child : order.order) {
-    const int parent = order.parent[child];
-    if (parent < 0) continue;
-    const io::LinkRecord& l = done.at({parent, child});
-    ScanRegistration& s = result.scans[child];
-    s.registered = true;
-    s.reason.clear();
-    s.parent = parent;
-    s.world_from_scan = result.scans[parent].world_from_scan * l.parent_from_child;
-    result.links.push_back(l);
-  }
-  // Global: every other overlapping pair becomes a link, then the pose graph.
-  if (options.global) {
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) {
-        if (order.parent[j] == i || order.parent[i] == j) continue;
-        if (!result.scans[i].registered || !result.scans[j].registered) continue;
-        if (std::max(overlap(i, j), overlap(j, i)) < options.thresholds.weak_overlap) continue;
-        if (std::find(excluded.begin(), excluded.end(), std::make_pair(i, j)) != excluded.end()) continue;
-        if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
-        const bool i_parent = overlap(i, j) >= overlap(j, i);
-        io::LinkRecord l = i_parent ? link(i, j) : link(j, i);
-        if (l.status == io::LinkStatus::kFailed) continue;
-        l.loop_check = true;
-        result.links.push_back(l);
-      }
-    if (Status g = RunGlobalRegistration(scans, cancel, &result); !g) return g.error();
-  }
-  for (const auto& [key, l] : done) {
-    if (l.status != io::LinkStatus::kFailed) continue;
-    result.links.push_back(l);
-    ScanRegistration& s = result.scans[key.second];
-    if (!s.registered) s.reason = "link to " + scans[key.first].name + " failed: " + l.reason;
-  }
-  result.seconds_pairs = Since(t_pairs);
   result.seconds_total = Since(t_start);
   progress.Report(1.0, "registration done");
   return result;

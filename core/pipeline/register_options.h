@@ -68,7 +68,8 @@ struct RegisterOptions {
   // none: 0.91 -> 0.55 mm. Costs about one more pair registration per scan.
   bool global = true;
   // --coarse none: no features; refine from the scans' current world_from_scan (a .conf file, a
-  // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h).
+  // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h;
+  // both paths run the one driver of core/pipeline/registration_driver.h).
   bool from_current_poses = false;
   // Scans whose pose was imported (io::ProjectScan::imported_pose) keep it: they anchor the
   // registration and the other scans are placed relative to them. Otherwise imported poses are

@@ -1,0 +1,194 @@
+#include "core/pipeline/registration_driver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "core/common/log.h"
+#include "core/geometry/transform.h"
+#include "core/pipeline/global_registration.h"
+#include "core/registration/scan_order.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+bool Contains(const std::vector<std::pair<int, int>>& edges, int parent, int child) {
+  return std::find(edges.begin(), edges.end(), std::make_pair(parent, child)) != edges.end();
+}
+
+Error Cancelled() { return MakeError(ErrorCode::kCancelled, "registration cancelled"); }
+
+}  // namespace
+
+Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
+                         const RegisterOptions& options, ProgressSink& progress, const CancelToken& cancel,
+                         ProjectRegistration* result) {
+  const int n = static_cast<int>(scans.size());
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::pair<int, int>> excluded = choices.excluded;
+
+  // Each ordered pair is registered at most once.
+  std::map<std::pair<int, int>, PairResult> done;
+  auto link = [&](int parent, int child) -> PairResult& {
+    auto it = done.find({parent, child});
+    if (it != done.end()) return it->second;
+    progress.Report(std::min(1.0, double(done.size()) / (2.0 * std::max(1, n - 1))),
+                    std::string(source.verb) + " " + scans[child].name + " to " + scans[parent].name);
+    PairResult& r = done.emplace(std::make_pair(parent, child), source.register_pair(parent, child)).first->second;
+    LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(r.link.status) +
+            (r.link.reason.empty() ? "" : " (" + r.link.reason + ")"));
+    return r;
+  };
+  auto fail_link = [&](int parent, int child, const std::string& reason) {
+    PairResult& r = done.at({parent, child});
+    r.link.status = io::LinkStatus::kFailed;
+    r.link.reason = reason;
+    excluded.emplace_back(parent, child);
+  };
+
+  // W §2 step 4 with failure handling: register along the tree; a failed link is excluded and the
+  // tree recomputed, so the next-best edge takes its place.
+  ScanOrder order;
+  std::vector<Eigen::Isometry3d> world(n, Eigen::Isometry3d::Identity());
+  std::vector<int> checked_with(n, -1);
+  for (int round = 0; round < 4 * n * n; ++round) {
+    Expected<ScanOrder> o =
+        ComputeScanOrder(source.weights, choices.root, choices.overrides, excluded, source.min_weight);
+    if (!o) return o.error();
+    order = *o;
+    bool changed = false;
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      if (cancel.IsCancelled()) return Cancelled();
+      if (link(parent, child).link.status == io::LinkStatus::kFailed) {
+        excluded.emplace_back(parent, child);
+        changed = true;
+        break;
+      }
+      world[child] = world[parent] * done.at({parent, child}).link.parent_from_child;
+    }
+    if (cancel.IsCancelled()) return Cancelled();
+    if (changed) continue;
+    if (!source.loop_checks || !options.verify_loops) break;
+    // Loop check (beyond W): register each scan also to its best other placed neighbour and compare
+    // with the tree. Both links of a cycle that does not close are failed: a pairwise registration
+    // can be self-consistent and wrong (repeated façades), a closed loop rarely is.
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
+      if (!check_all && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
+      int best = -1, best_weight = source.min_check_weight - 1;
+      for (int q : order.order) {
+        if (q == child || q == parent || order.parent[q] == child) continue;
+        if (Contains(excluded, q, child)) continue;
+        const int w = std::max(source.weights(q, child), source.weights(child, q));
+        if (w > best_weight) best = q, best_weight = w;
+      }
+      if (best < 0) continue;
+      // A check already made the other way round serves (inverted).
+      const auto reverse = done.find({child, best});
+      const bool use_reverse = reverse != done.end() && reverse->second.link.status != io::LinkStatus::kFailed;
+      const PairResult& check = use_reverse ? reverse->second : link(best, child);
+      if (check.link.status == io::LinkStatus::kFailed) continue;
+      const Eigen::Isometry3d best_from_child =
+          use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
+      if (!use_reverse) checked_with[child] = best;
+      const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
+      if (gap.position_m <= options.loop_tolerance_m && gap.angle_rad <= options.loop_tolerance_rad) continue;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans[parent].name.c_str(),
+                    scans[child].name.c_str(), scans[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
+      LogWarning(std::string(buf) + "; both links failed");
+      fail_link(parent, child, buf);
+      if (use_reverse) {
+        fail_link(child, best, buf);
+      } else {
+        fail_link(best, child, buf);
+      }
+      changed = true;
+      break;
+    }
+    if (!changed) break;
+  }
+
+  // Chain world poses from the root, which keeps its current pose (W §2 step 10).
+  result->root = order.root;
+  result->scans.assign(n, ScanRegistration());
+  for (int i = 0; i < n; ++i) {
+    result->scans[i].name = scans[i].name;
+    result->scans[i].reason = source.no_link_reason;
+  }
+  ScanRegistration& r0 = result->scans[order.root];
+  r0.registered = true;
+  r0.reason.clear();
+  r0.world_from_scan = scans[order.root].world_from_scan;
+  if (source.has_coarse) {
+    r0.coarse_world_from_scan = r0.world_from_scan;
+    r0.has_coarse = true;
+  }
+  for (int child : order.order) {
+    const int parent = order.parent[child];
+    if (parent < 0) continue;
+    const PairResult& pr = done.at({parent, child});
+    ScanRegistration& s = result->scans[child];
+    const ScanRegistration& p = result->scans[parent];
+    s.registered = true;
+    s.reason.clear();
+    s.parent = parent;
+    s.world_from_scan = p.world_from_scan * pr.link.parent_from_child;
+    s.has_coarse = p.has_coarse && pr.coarse_ok;
+    if (s.has_coarse) s.coarse_world_from_scan = p.coarse_world_from_scan * pr.coarse_parent_from_child;
+    result->links.push_back(pr.link);
+  }
+  // Loop-check links that closed (evidence, not chained).
+  for (int child = 0; child < n; ++child) {
+    if (checked_with[child] < 0 || !result->scans[child].registered) continue;
+    const auto it = done.find({checked_with[child], child});
+    if (it == done.end() || it->second.link.status == io::LinkStatus::kFailed) continue;
+    if (order.parent[child] == checked_with[child]) continue;
+    io::LinkRecord l = it->second.link;
+    l.loop_check = true;
+    result->links.push_back(l);
+  }
+  if (options.global) {
+    // Every other overlapping pair becomes a link of the pose graph.
+    for (int i = 0; i < source.overlap.rows(); ++i)
+      for (int j = i + 1; j < source.overlap.cols(); ++j) {
+        if (order.parent[j] == i || order.parent[i] == j) continue;
+        if (!result->scans[i].registered || !result->scans[j].registered) continue;
+        if (std::max(source.overlap(i, j), source.overlap(j, i)) < source.extra_overlap) continue;
+        if (Contains(excluded, i, j)) continue;
+        if (cancel.IsCancelled()) return Cancelled();
+        const bool i_parent = source.overlap(i, j) >= source.overlap(j, i);
+        io::LinkRecord l = (i_parent ? link(i, j) : link(j, i)).link;
+        if (l.status == io::LinkStatus::kFailed) continue;
+        l.loop_check = true;
+        result->links.push_back(l);
+      }
+    if (Status g = RunGlobalRegistration(scans, cancel, result); !g) return g;
+  }
+  // Failed attempts, and the reason of each scan left out.
+  for (const auto& [key, pr] : done) {
+    if (pr.link.status != io::LinkStatus::kFailed) continue;
+    result->links.push_back(pr.link);
+    ScanRegistration& s = result->scans[key.second];
+    if (!s.registered) s.reason = "link to " + scans[key.first].name + " failed: " + pr.link.reason;
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::optional<int>& parent = choices.overrides[i];
+    if (!parent || result->scans[i].registered) continue;
+    auto it = done.find({*parent, i});
+    result->scans[i].reason = it != done.end()
+                                  ? "the link to its parent override " + scans[*parent].name + " failed (" +
+                                        it->second.link.reason + "); remove or change the override"
+                                  : "its parent override " + scans[*parent].name + " is not registered";
+  }
+  result->seconds_pairs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return Status::Ok();
+}
+
+}  // namespace scanreg::pipeline

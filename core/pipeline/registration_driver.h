@@ -1,0 +1,52 @@
+// The one registration driver behind RegisterScans (links from feature matches, W §2) and
+// RegisterFromCurrentPoses (links from the overlap at the current poses): the scan order over the
+// link weights with each failed link replaced by the next-best edge, loop checks, world poses
+// chained from the root, the global step, and the reason of every scan left out. What differs
+// between the two paths is a LinkSource; the per-scan data (features, samples) are prepared once by
+// the caller, before the driver runs.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+#include "core/pipeline/register_options.h"
+#include "core/pipeline/register_pair.h"
+#include "core/pipeline/register_project.h"
+
+namespace scanreg::pipeline {
+
+struct LinkSource {
+  // Edge weights of the scan order: weights(i, j) for parent i, child j (feature matches, or the
+  // overlap in per mille); edges below min_weight are not links.
+  Eigen::MatrixXi weights;
+  int min_weight = 1;
+  // Registers child to parent (called at most once per ordered pair).
+  std::function<PairResult(int parent, int child)> register_pair;
+  const char* verb = "registering";  // progress: "registering s02 to s01"
+  // Loop checks (beyond W): each tree link is also verified against the child's best other
+  // neighbour by weight (min_check_weight or more); a loop that does not close fails both links.
+  bool loop_checks = true;
+  int min_check_weight = 1;
+  // Extra links for the global step besides the loop checks: every other pair whose overlap(i, j)
+  // or overlap(j, i) reaches `extra_overlap` (empty matrix: none), registered with the larger
+  // overlap's scan as the parent.
+  Eigen::MatrixXd overlap;
+  double extra_overlap = 0.0;
+  // Whether pair results carry a coarse pose (W fig. 6 "after coarse"), and the reason given to a
+  // scan no link reaches.
+  bool has_coarse = true;
+  std::string no_link_reason;
+};
+
+// Runs the driver on prepared scans; `result` arrives with the timings and the confusion matrix of
+// the preparation and leaves with the scan order, poses, links and reasons.
+Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
+                         const RegisterOptions& options, ProgressSink& progress, const CancelToken& cancel,
+                         ProjectRegistration* result);
+
+}  // namespace scanreg::pipeline
