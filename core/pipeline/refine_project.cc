@@ -157,7 +157,8 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     return r;
   };
   source.verb = "refining";
-  source.loop_checks = false;
+  source.loop_checks = true;  // a link whose loop does not close is failed, never chained (issue 11)
+  source.min_check_weight = source.min_weight;
   source.overlap = overlap;
   source.extra_overlap = options.thresholds.weak_overlap;
   source.has_coarse = false;

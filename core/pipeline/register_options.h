@@ -65,7 +65,8 @@ struct RegisterOptions {
   // On by default: measured (scanreg-bench --section global) never worse than the tree: 11 simulated
   // stations 1.86 -> 1.82 mm worst; one tree link off by 5 cm / 0.3 deg: 117 -> 13 mm; one wrong
   // extra link (1 m, 5 deg): down-weighted, 1.863 -> 1.866 mm; the 10 bunny scans with --coarse
-  // none: 0.91 -> 0.55 mm. Costs about one more pair registration per scan.
+  // none: 0.91 -> 0.57 mm (0.55 before its links were loop-checked). Costs about one more pair
+  // registration per scan.
   bool global = true;
   // --coarse none: no features; refine from the scans' current world_from_scan (a .conf file, a
   // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h;

@@ -155,10 +155,17 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     result->links.push_back(l);
   }
   if (options.global) {
-    // Every other overlapping pair becomes a link of the pose graph.
+    // Every other overlapping pair becomes a link of the pose graph (once: a loop check may hold it).
+    auto linked = [&](int i, int j) {
+      for (const io::LinkRecord& l : result->links)
+        if ((l.parent == scans[i].name && l.child == scans[j].name) ||
+            (l.parent == scans[j].name && l.child == scans[i].name))
+          return true;
+      return false;
+    };
     for (int i = 0; i < source.overlap.rows(); ++i)
       for (int j = i + 1; j < source.overlap.cols(); ++j) {
-        if (order.parent[j] == i || order.parent[i] == j) continue;
+        if (order.parent[j] == i || order.parent[i] == j || linked(i, j)) continue;
         if (!result->scans[i].registered || !result->scans[j].registered) continue;
         if (std::max(source.overlap(i, j), source.overlap(j, i)) < source.extra_overlap) continue;
         if (Contains(excluded, i, j)) continue;

@@ -83,6 +83,39 @@ std::pair<double, double> WorstError(const std::vector<Scan>& scans, const std::
   return {pos, ang};
 }
 
+// Street-sized defaults (12 mm noise, 0.10 m overlap distance) on a 20 cm object make every pair
+// "overlap": links far off can pass the surface checks. A link whose loop does not close is failed,
+// so no scan is left registered far from the truth: it is unregistered with the reason instead.
+TEST(RegisterFromCurrentPoses, LinksWhoseLoopsDoNotCloseAreFailedNotChained) {
+  SCANREG_REQUIRE_REALDATA(data);
+  const std::vector<Scan> scans = PerturbedBunny(data, 8.0, 8.0);
+  ASSERT_EQ(scans.size(), 4u);
+  RegisterOptions o;  // defaults, as a user without flags
+  o.from_current_poses = true;
+  o.fine = FineMethod::kEm;
+  o.root = "bun000";
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  int wrong = 0, unregistered = 0, loop_failures = 0;
+  for (std::size_t i = 1; i < scans.size(); ++i) {
+    const ScanRegistration& s = r->scans[i];
+    if (!s.registered) {
+      ++unregistered;
+      continue;
+    }
+    const PoseError e =
+        ComparePoses(r->scans[0].world_from_scan.inverse() * s.world_from_scan,
+                     scans[0].reference_world_from_scan->inverse() * *scans[i].reference_world_from_scan);
+    std::printf("%s: %.1f mm %.2f deg from bun.conf\n", s.name.c_str(), e.position_m * 1e3, e.angle_rad * kDeg);
+    wrong += e.position_m > 0.005 || e.angle_rad > 2.0 / kDeg;
+  }
+  for (const io::LinkRecord& l : r->links) loop_failures += l.reason.find("does not close") != std::string::npos;
+  std::printf("%d unregistered, %d links failed by their loop\n", unregistered, loop_failures);
+  EXPECT_EQ(wrong, 0) << "a scan registered far from the truth";
+}
+
 TEST(RegisterFromCurrentPoses, StanfordBunnyPerturbedBackToBunConf) {
   SCANREG_REQUIRE_REALDATA(data);
   const std::vector<Scan> scans = PerturbedBunny(data, 3.0, 3.0);
