@@ -4,6 +4,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
 #include "core/io/e57_reader.h"
+#include "core/io/output_paths.h"
 #include "core/io/scan_file.h"
 #include "core/io/text_parse.h"
 
@@ -18,9 +19,11 @@ int RunConvert(const std::vector<std::string>& argv) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: give an input and an output file"));
   }
   const std::filesystem::path in = args->positional()[0], out = args->positional()[1];
+  if (Status s = io::CheckNotAnInput(out, {in}, "convert: OUT"); !s) return Fail(s.error());
   std::error_code ec;
   if (std::filesystem::exists(out, ec) && std::filesystem::equivalent(in, out, ec)) {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: input and output are the same file; input files are never modified"));
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "convert: input and output are the same file; input files are never modified"));
   }
   TerminalProgress progress;
   CancelToken cancel;
@@ -29,7 +32,8 @@ int RunConvert(const std::vector<std::string>& argv) {
   }
   io::E57ReadOptions chosen;
   chosen.names = args->GetAll("scan");
-  auto scans = chosen.names.empty() ? io::ReadScanFile(in, progress, cancel) : io::ReadE57(in, chosen, progress, cancel);
+  auto scans =
+      chosen.names.empty() ? io::ReadScanFile(in, progress, cancel) : io::ReadE57(in, chosen, progress, cancel);
   if (!scans) return Fail(scans.error());
   if (Status s = io::WriteScanFile(out, *scans, progress, cancel); !s) return Fail(s.error());
   std::size_t points = 0;
@@ -40,15 +44,20 @@ int RunConvert(const std::vector<std::string>& argv) {
 
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
-      {"demo", "the built-in demo: simulate a street project, register it, write the merged mesh and the report", RunDemo},
+      {"demo", "the built-in demo: simulate a street project, register it, write the merged mesh and the report",
+       RunDemo},
       {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
       {"register", "register every scan of a project automatically (W pipeline)", RunRegister},
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
       {"new", "create a project from PTX / E57 / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
-      {"report", "write the registration report: HTML page with the confusion matrix, network, links, poses, errors", RunReport},
-      {"export-poses", "write world_from_scan poses as JSON, CloudCompare 4x4 .txt files or a CSV of positions and angles", RunExportPoses},
-      {"export-clouds", "write the registered scans as PTX / E57 / PLY, poses kept in the header or applied", RunExportClouds},
+      {"report", "write the registration report: HTML page with the confusion matrix, network, links, poses, errors",
+       RunReport},
+      {"export-poses",
+       "write world_from_scan poses as JSON, CloudCompare 4x4 .txt files or a CSV of positions and angles",
+       RunExportPoses},
+      {"export-clouds", "write the registered scans as PTX / E57 / PLY, poses kept in the header or applied",
+       RunExportClouds},
       {"convert", "convert a scan file between PTX, E57, PLY and PCD", RunConvert},
   };
   return commands;

@@ -1,9 +1,11 @@
 // scanreg-cli merge: the registered scans of a project to one mesh (SPEC §4).
 #include <chrono>
 #include <cstdio>
+#include <optional>
 
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
+#include "core/io/output_paths.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/project_scans.h"
 
@@ -55,8 +57,15 @@ int RunMerge(const std::vector<std::string>& argv) {
   if (points) {
     if (Status s = pipeline::ValidatePointsPath(*points); !s) return Fail(s.error());
   }
+  if (Status s = pipeline::ValidateMeshPath(*out); !s) return Fail(s.error());
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
+  // Checked before the work: a merge can take minutes, and must never replace what it reads.
+  for (const auto& [path, what] :
+       {std::make_pair(std::optional<std::string>(out), "merge: --out"), std::make_pair(points, "merge: --points")}) {
+    if (!path) continue;
+    if (Status s = io::CheckNotAnInput(*path, io::ProjectInputs(*project), what); !s) return Fail(s.error());
+  }
   TerminalProgress progress;
   CancelToken cancel;
   SubProgress load_progress(progress, 0.0, 0.1);

@@ -5,6 +5,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
 #include "core/geometry/transform.h"
+#include "core/io/output_paths.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/pipeline/create_project.h"
@@ -28,6 +29,12 @@ int RunNew(const std::vector<std::string>& argv) {
   for (std::size_t i = 1; i < args->positional().size(); ++i) options.scan_files.emplace_back(args->positional()[i]);
   if (auto p = args->Get("poses")) options.poses = *p;
   if (auto p = args->Get("reference-poses")) options.reference_poses = *p;
+  std::vector<std::filesystem::path> inputs = options.scan_files;
+  for (const auto& p : {options.poses, options.reference_poses})
+    if (p) inputs.push_back(*p);
+  if (Status s = io::CheckNotAnInput(args->positional()[0], inputs, "new: the project file"); !s) {
+    return Fail(s.error());
+  }
   TerminalProgress progress;
   CancelToken cancel;
   auto project = pipeline::CreateProject(args->positional()[0], options, progress, cancel);
@@ -105,6 +112,7 @@ int RunExportPoses(const std::vector<std::string>& argv) {
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
   const bool include_unregistered = args->Has("include-unregistered");
+  const std::vector<std::filesystem::path> inputs = io::ProjectInputs(*project);
   std::vector<io::NamedPose> poses;
   std::string left_out;
   int unregistered = 0;
@@ -125,6 +133,12 @@ int RunExportPoses(const std::vector<std::string>& argv) {
                      ? "left out; a matrix file cannot say a scan is unregistered"
                      : "left out; --include-unregistered lists them with status 'unregistered' and no pose");
   }
+  for (const io::NamedPose& p : poses) {
+    const std::filesystem::path file =
+        format == "txt" ? std::filesystem::path(*out) / (p.scan + ".txt") : std::filesystem::path(*out);
+    if (Status s = io::CheckNotAnInput(file, inputs, "export-poses: --out"); !s) return Fail(s.error());
+  }
+  if (Status s = io::CheckNotAnInput(*out, inputs, "export-poses: --out"); !s) return Fail(s.error());
   if (format == "json" || format == "csv") {
     Status written = format == "json" ? io::WritePosesJson(*out, poses) : io::WritePosesCsv(*out, poses);
     if (!written) return Fail(written.error());

@@ -42,6 +42,16 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return merge::WriteMeshFile(path, mesh); }
 
+Status ValidateMeshPath(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".ply" || ext == ".obj" || ext == ".stl") return Status::Ok();
+  return MakeError(ErrorCode::kInvalidArgument,
+                   "merge: the mesh is written as PLY, OBJ or STL; give the mesh file a .ply, .obj or .stl name, "
+                   "not " +
+                       path.string());
+}
+
 Status ValidatePointsPath(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));

@@ -31,7 +31,9 @@ Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);
 // coordinates: a binary PLY of doubles (.ply) or LAS 1.4 at 0.1 mm (.las); atomic. Other extensions
 // are an error.
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh);
-// The check WritePoints makes first, for callers to run before a long merge.
+// The checks WriteMesh and WritePoints make first (the extension), for callers to run before a
+// long merge.
+Status ValidateMeshPath(const std::filesystem::path& path);
 Status ValidatePointsPath(const std::filesystem::path& path);
 
 }  // namespace scanreg::pipeline

@@ -149,6 +149,37 @@ TEST(CliExport, ExportCloudsWritesRegisteredScansAndSkipsTheOthers) {
   EXPECT_NE(bad.output.find("ptx, e57, ply or las"), std::string::npos) << bad.output;
 }
 
+// No command writes over a file it reads: each refuses (status 2, both files named) before any
+// work, and the input is byte for byte as it was.
+TEST(CliExport, OutputsNeverReplaceInputs) {
+  test::TempDir dir;
+  const auto project_file = TrueProject(dir);
+  const auto scan = dir / "p" / "s01.ptx";
+  const std::string project_bytes = ReadBytes(project_file), scan_bytes = ReadBytes(scan);
+  const std::string p = Quote(project_file);
+  const std::vector<std::string> commands = {
+      "merge " + p + " --voxel 0.2 --out " + Quote(dir / "p" / "s01.ptx"),  // wrong extension: refused first
+      "merge " + p + " --voxel 0.2 --out " + Quote(dir / "m.ply") + " --points " + Quote(project_file),
+      "export-poses " + p + " --format json --out " + p,
+      "new " + Quote(scan) + " " + Quote(scan),
+      "convert " + Quote(scan) + " " + Quote(dir / "p" / ".." / "p" / "s01.ptx"),
+  };
+  for (const std::string& c : commands) {
+    RunResult r = RunCli(c);
+    SCOPED_TRACE(c);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(ReadBytes(project_file), project_bytes);
+    EXPECT_EQ(ReadBytes(scan), scan_bytes);
+  }
+  RunResult refused = RunCli("export-poses " + p + " --format csv --out " + Quote(dir / "p" / "s01.ptx"));
+  EXPECT_EQ(refused.status, 2);
+  EXPECT_NE(refused.output.find("is the input file"), std::string::npos) << refused.output;
+  EXPECT_EQ(ReadBytes(scan), scan_bytes);
+  RunResult onto_project = RunCli("export-poses " + p + " --format json --out " + p);
+  EXPECT_NE(onto_project.output.find("is the input file"), std::string::npos) << onto_project.output;
+  EXPECT_EQ(ReadBytes(project_file), project_bytes);
+}
+
 // Every command of `scanreg-cli --help` has a section in the man page, and every option of each
 // command's --help is described there.
 TEST(CliExport, ManPageListsEveryCommandAndOption) {
