@@ -1,10 +1,12 @@
 #include "core/common/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 
 namespace scanreg {
@@ -12,11 +14,32 @@ namespace scanreg {
 namespace {
 constexpr std::size_t kBufferBytes = 4 << 20;
 std::atomic<unsigned> g_counter{0};
+
+// ".<name>.tmp-": the prefix of the temporary files of `target` (hidden, so that a listing or a
+// glob of the folder does not pick them up).
+std::string TempPrefix(const std::filesystem::path& target) { return "." + target.filename().string() + ".tmp-"; }
+
+// Removes the temporary files of `target` left by processes that no longer run (killed mid-write).
+void RemoveStaleTemporaries(const std::filesystem::path& target) {
+  const std::string prefix = TempPrefix(target);
+  std::error_code ec;
+  const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    char* end = nullptr;
+    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
+    if (pid <= 0 || end == nullptr || *end != '-') continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to judge)
+    std::filesystem::remove(e.path(), ec);
+  }
+}
+
 }  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
-  temp_ = target_;
-  temp_ += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1));
+  temp_ = target_.parent_path() /
+          (TempPrefix(target_) + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1)));
 }
 
 AtomicFile::~AtomicFile() {
@@ -36,6 +59,7 @@ Status AtomicFile::Fail(const std::string& what) {
 }
 
 Status AtomicFile::Open() {
+  RemoveStaleTemporaries(target_);
   fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) return Fail("create a temporary file beside it");
   buffer_.reserve(kBufferBytes);

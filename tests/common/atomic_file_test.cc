@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <fstream>
 #include <sstream>
 
@@ -34,6 +38,33 @@ TEST(AtomicFileTest, CommitReplacesTheTargetAndLeavesNoTemporary) {
   ASSERT_TRUE(file.Commit().ok());
   EXPECT_EQ(ReadAll(path), "new content");
   EXPECT_EQ(CountFiles(dir.path()), 1);
+}
+
+// A process killed mid-write leaves its temporary; the next write of the same file removes it, but
+// never one of a process that still runs. Temporaries are hidden from listings and globs.
+TEST(AtomicFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
+  test::TempDir dir;
+  const auto path = dir / "a.txt";
+  pid_t dead = 0;
+  for (pid_t p = 4000000; p > 300000; p -= 9973) {
+    if (::kill(p, 0) != 0 && errno == ESRCH) {
+      dead = p;
+      break;
+    }
+  }
+  ASSERT_GT(dead, 0);
+  const auto stale = dir / (".a.txt.tmp-" + std::to_string(dead) + "-0");
+  const auto live = dir / (".a.txt.tmp-" + std::to_string(::getpid()) + "-99999");
+  const auto other = dir / (".b.txt.tmp-" + std::to_string(dead) + "-0");
+  for (const auto& f : {stale, live, other}) std::ofstream(f) << "partial";
+  AtomicFile file(path);
+  EXPECT_EQ(file.temp_path().filename().string().rfind(".a.txt.tmp-", 0), 0u) << file.temp_path();
+  ASSERT_TRUE(file.Open().ok());
+  ASSERT_TRUE(file.Write("x").ok());
+  ASSERT_TRUE(file.Commit().ok());
+  EXPECT_FALSE(std::filesystem::exists(stale));
+  EXPECT_TRUE(std::filesystem::exists(live)) << "a running process's temporary stays";
+  EXPECT_TRUE(std::filesystem::exists(other)) << "only the temporaries of the file being written";
 }
 
 TEST(AtomicFileTest, AbandonedWriteKeepsTheOldFile) {
