@@ -66,6 +66,21 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
     }
     out.overrides[i] = p;
   }
+  // A cycle of overrides, by scan name, before any expensive work.
+  for (int start = 0; start < n; ++start) {
+    std::string chain = scans[start].name;
+    std::vector<char> seen(n, 0);
+    seen[start] = 1;
+    for (int cur = start; out.overrides[cur];) {
+      cur = *out.overrides[cur];
+      chain += " -> " + scans[cur].name;
+      if (seen[cur]) {
+        return MakeError(ErrorCode::kInvalidArgument, "parent overrides form a cycle (scan -> parent): " + chain +
+                                                          "; remove one of these overrides");
+      }
+      seen[cur] = 1;
+    }
+  }
   for (const auto& [p, c] : rejected) {
     const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
     if (pi >= 0 && ci >= 0) out.excluded.emplace_back(pi, ci);
@@ -90,6 +105,10 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   }
   const auto t_start = std::chrono::steady_clock::now();
   ProjectRegistration result;
+
+  // The user's choices are checked before the features are computed.
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
+  if (!choices) return choices.error();
 
   // W §2 steps 1 and 5: features and confidence maps, once per scan.
   std::vector<PreparedScan> prepared(n);
@@ -118,8 +137,6 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   result.confusion = table->confusion;
   result.seconds_matching = Since(t0);
 
-  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
-  if (!choices) return choices.error();
   LinkSource source;
   source.weights = result.confusion;
   source.register_pair = [&](int parent, int child) {

@@ -7,6 +7,7 @@
 
 #include "core/geometry/transform.h"
 #include "core/simulate/project_sim.h"
+#include "tests/support/test_paths.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -76,8 +77,9 @@ TEST_F(StreetProject, EveryScanRegisteredWithinTwoCentimetresAndATenthOfADegree)
   for (const ScanRegistration& s : r->scans) {
     if (s.parent < 0) continue;
     const Scan& child = scans[&s - r->scans.data()];
-    const double d = (scans[s.parent].reference_world_from_scan->translation() -
-                      child.reference_world_from_scan->translation()).norm();
+    const double d =
+        (scans[s.parent].reference_world_from_scan->translation() - child.reference_world_from_scan->translation())
+            .norm();
     EXPECT_LT(d, 12.5) << scans[s.parent].name << " <- " << child.name;
   }
   // The confusion matrix: diagonal = feature counts, neighbours share more matches than far scans.
@@ -182,6 +184,23 @@ TEST(RegisterProjectTest, NonsenseOptionsAndTooFewScansAreErrors) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("'a'"), std::string::npos) << "an empty scan is named";
   EXPECT_FALSE(Register(two, bad).ok());
+}
+
+// A cycle of parent overrides is named by scan names, before any feature is computed.
+TEST(RegisterProjectTest, OverrideCycleIsNamedBeforeTheFeatures) {
+  SimulatedProjectOptions o = StreetOptions(3);
+  o.scanner.cols = 300;
+  o.scanner.rows = 80;
+  const std::vector<Scan> scans = Simulate(o);
+  ASSERT_EQ(scans.size(), 3u);
+  test::TempDir cache;
+  RegisterOptions options;
+  options.feature_cache_dir = cache.path();
+  Expected<ProjectRegistration> r =
+      Register(scans, options, {std::string("s02"), std::string("s03"), std::string("s01")});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("s01 -> s02 -> s03 -> s01"), std::string::npos) << r.error().message;
+  EXPECT_TRUE(std::filesystem::is_empty(cache.path())) << "no feature was computed";
 }
 
 }  // namespace
