@@ -4,14 +4,19 @@
 
 #include <cstdlib>
 
+#include "core/io/text_parse.h"
+
 namespace scanreg::cli {
 
 int Fail(const Error& error) {
-  std::fprintf(stderr, "scanreg-cli: %s\n", error.message.c_str());
+  std::fprintf(stderr, "scanreg-cli: %s\n", io::EscapeControlBytes(error.message).c_str());
   switch (error.code) {
-    case ErrorCode::kInvalidArgument: return 2;
-    case ErrorCode::kCancelled: return 130;
-    default: return 1;
+    case ErrorCode::kInvalidArgument:
+      return 2;
+    case ErrorCode::kCancelled:
+      return 130;
+    default:
+      return 1;
   }
 }
 

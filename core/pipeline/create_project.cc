@@ -8,15 +8,10 @@
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
 #include "core/io/scan_file.h"
+#include "core/io/text_parse.h"
 
 namespace scanreg::pipeline {
 namespace {
-
-std::string LowerExtension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 // A folder of 4x4 matrix files, one per scan named <scan>.txt (what `export-poses --format txt`
 // writes), in name order.
@@ -24,7 +19,7 @@ Expected<std::vector<io::NamedPose>> ReadMatrixFolder(const std::filesystem::pat
   std::vector<std::filesystem::path> files;
   std::error_code ec;
   for (const auto& e : std::filesystem::directory_iterator(dir, ec))
-    if (e.is_regular_file(ec) && LowerExtension(e.path()) == ".txt") files.push_back(e.path());
+    if (e.is_regular_file(ec) && io::LowerExtension(e.path()) == ".txt") files.push_back(e.path());
   if (ec) return MakeError(ErrorCode::kIoError, "cannot list the pose folder '" + dir.string() + "': " + ec.message());
   if (files.empty()) {
     return MakeError(ErrorCode::kNotFound, "the pose folder '" + dir.string() + "' holds no <scan>.txt matrix file");
@@ -44,7 +39,7 @@ Expected<std::vector<io::NamedPose>> ReadMatrixFolder(const std::filesystem::pat
 Expected<std::vector<io::NamedPose>> ReadPoseFile(const std::filesystem::path& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return ReadMatrixFolder(path);
-  const std::string ext = LowerExtension(path);
+  const std::string ext = io::LowerExtension(path);
   if (ext == ".conf") return io::ReadBunConf(path);
   if (ext == ".json") return io::ReadPosesJson(path);
   if (ext == ".csv") return io::ReadPosesCsv(path);

@@ -45,6 +45,13 @@ TEST(PoseFile, BunConfErrorsNameTheLine) {
   EXPECT_NE(r.error().message.find("bad.conf, line 3:"), std::string::npos) << r.error().message;
   EXPECT_NE(r.error().message.find("7 numbers"), std::string::npos);
 
+  // Control bytes from the file are escaped in the message (a terminal never sees them raw).
+  WriteBytes(dir / "esc.conf", "bmesh a.ply 0 0 \x1b[2J 0 0 0 1\n");
+  r = ReadBunConf(dir / "esc.conf");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("'\\x1b[2J'"), std::string::npos) << r.error().message;
+  EXPECT_EQ(r.error().message.find('\x1b'), std::string::npos);
+
   WriteBytes(dir / "tok.conf", "bmesh a.ply 0 0 zero 0 0 0 1\n");
   r = ReadBunConf(dir / "tok.conf");
   ASSERT_FALSE(r.ok());
