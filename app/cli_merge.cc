@@ -34,7 +34,7 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto voxel = args->GetDouble("voxel", options.voxel_m, -1e9, 1e9);
   if (!voxel) return Fail(voxel.error());
   options.voxel_m = *voxel;
-  auto sigma = args->GetDouble("sigma", options.sigma_m, -1e9, 1e9);
+  auto sigma = args->GetDouble("sigma", options.sigma_m, 1e-6, 1.0);  // a range noise beyond 1 m means nothing
   if (!sigma) return Fail(sigma.error());
   options.sigma_m = *sigma;
   auto smooth = args->GetInt("smooth", 0, 0, 100);

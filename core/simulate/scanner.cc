@@ -10,9 +10,7 @@
 namespace scanreg {
 namespace {
 
-Status Invalid(const std::string& what) {
-  return MakeError(ErrorCode::kInvalidArgument, "scanner options: " + what);
-}
+Status Invalid(const std::string& what) { return MakeError(ErrorCode::kInvalidArgument, "scanner options: " + what); }
 
 constexpr double kDeg = M_PI / 180.0;
 
@@ -24,6 +22,11 @@ enum Stream : std::uint64_t { kMixedChance = 1, kMixedWeight = 2, kRangeNoise = 
 Status ScannerOptions::Validate() const {
   if (cols < 8 || cols > 100000) return Invalid("columns " + std::to_string(cols) + " must be in [8, 100000]");
   if (rows < 2 || rows > 50000) return Invalid("rows " + std::to_string(rows) + " must be in [2, 50000]");
+  // 17 bytes per cell, held per station: 100 M cells (1.7 GB a scan) is beyond any real scanner's panorama.
+  if (static_cast<long long>(cols) * rows > 100'000'000LL) {
+    return Invalid("a " + std::to_string(cols) + " x " + std::to_string(rows) +
+                   " panorama has more than 100 million cells (1.7 GB per scan); choose a smaller size");
+  }
   if (!(elevation_min_deg >= -90.0 && elevation_max_deg <= 90.0))
     return Invalid("elevations must lie within [-90, 90] degrees");
   if (!(elevation_min_deg < elevation_max_deg))

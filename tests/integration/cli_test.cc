@@ -286,6 +286,10 @@ TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
   EXPECT_NE(merged.output.find("merged point cloud: " + std::to_string(vertices) + " points"), std::string::npos);
   // Nonsense options are refused.
   EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --voxel 0 --out " + Quote(dir / "x.ply")).status, 2);
+  // Options that cannot mean anything are refused at once (the fuzz run: 277 s for --sigma 1e9, a
+  // crash for a 100000 x 50000 panorama).
+  EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --sigma 1e9 --out " + Quote(dir / "x.ply")).status, 2);
+  EXPECT_EQ(RunCli("simulate --stations 2 --size 100000x50000 --out " + Quote(dir / "huge")).status, 2);
   EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --method magic --out " + Quote(dir / "x.ply")).status, 2);
   EXPECT_EQ(
       RunCli("merge " + Quote(project_file) + " --points " + Quote(dir / "x.xyz") + " --out " + Quote(dir / "x.ply"))

@@ -41,8 +41,8 @@ bool BitIdentical(const Scan& a, const Scan& b) {
 // The exact (double) line of sight of a cell, scanner frame, as documented in ScannerOptions.
 Eigen::Vector3d ExactLineOfSight(const ScannerOptions& o, int r, int c) {
   const double az = -M_PI + (c + 0.5) * 2.0 * M_PI / o.cols;
-  const double el = (o.elevation_max_deg - (r + 0.5) * (o.elevation_max_deg - o.elevation_min_deg) / o.rows) * M_PI /
-                    180.0;
+  const double el =
+      (o.elevation_max_deg - (r + 0.5) * (o.elevation_max_deg - o.elevation_min_deg) / o.rows) * M_PI / 180.0;
   return {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
 }
 
@@ -206,7 +206,8 @@ TEST(ScannerTest, OcclusionNoPointBehindWall) {
       const double t = 6.0 / los.x();
       const double y = t * los.y(), z = 1.7 + t * los.z();
       const double az = std::atan2(los.y(), los.x());
-      const double el_lo = std::atan2(-1.7, std::hypot(6.0, y)) + margin, el_hi = std::atan2(1.3, std::hypot(6.0, y)) - margin;
+      const double el_lo = std::atan2(-1.7, std::hypot(6.0, y)) + margin,
+                   el_hi = std::atan2(1.3, std::hypot(6.0, y)) - margin;
       const double el = std::asin(los.z());
       if (std::abs(az) < az_max && el > el_lo && el < el_hi) {
         ASSERT_TRUE(std::abs(y) < 2 && z > 0 && z < 3);
@@ -237,6 +238,13 @@ TEST(ScannerTest, OptionsValidateRejectsNonsense) {
   o = ScannerOptions();
   o.reflectance_noise = -1;
   EXPECT_FALSE(o.Validate().ok());
+  o = ScannerOptions();
+  o.cols = 100000;  // each side within its range, the panorama not (the fuzz run's crash)
+  o.rows = 50000;
+  ASSERT_FALSE(o.Validate().ok());
+  EXPECT_NE(o.Validate().error().message.find("100 million cells"), std::string::npos);
+  o.rows = 1000;
+  EXPECT_TRUE(o.Validate().ok());
   NullProgress progress;
   CancelToken cancel;
   o = ScannerOptions();
