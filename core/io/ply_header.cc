@@ -116,6 +116,24 @@ Expected<PlyHeader> ParsePlyHeader(std::string_view text, const std::filesystem:
   if (!have_format) return err(lines.line_number(), "the header has no \"format\" line");
   header.body_offset = lines.offset();
   header.body_line = lines.line_number() + 1;
+  // The declared counts must fit the bytes that follow, before anyone allocates for them: a binary
+  // record takes at least its fixed-size properties (a list at least its count), an ASCII one at
+  // least a digit and a separator per property.
+  const double left = static_cast<double>(text.size() - header.body_offset);
+  double needed = 0;
+  for (const PlyElement& e : header.elements) {
+    double record = 0;
+    for (const PlyProperty& p : e.properties)
+      record += header.format == PlyFormat::kAscii ? 2.0 : PlyTypeSize(p.is_list ? p.count_type : p.type);
+    needed += record * static_cast<double>(e.count);
+    if (needed > left + 1) {
+      return MakeError(ErrorCode::kParseError,
+                       path.string() + ": the header declares " + std::to_string(e.count) + " '" + e.name +
+                           "' records, which need at least " + std::to_string(static_cast<long long>(needed)) +
+                           " bytes, but " + std::to_string(static_cast<long long>(left)) +
+                           " follow the header; the file is truncated or its header is damaged");
+    }
+  }
   return header;
 }
 
