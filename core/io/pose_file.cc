@@ -97,7 +97,7 @@ Expected<std::vector<NamedPose>> ReadPosesJson(const std::filesystem::path& path
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(*text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
     return MakeError(ErrorCode::kParseError, path.string() + ": not valid JSON (" + e.what() + ")");
   }
   if (!j.is_object() || !j.contains("version") || !j["version"].is_number_integer()) {

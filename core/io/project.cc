@@ -1,5 +1,8 @@
 #include "core/io/project.h"
 
+#include "core/io/text_parse.h"
+
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -172,12 +175,24 @@ const Eigen::MatrixXi* Project::CurrentConfusion() const {
 Expected<Project> LoadProject(const std::filesystem::path& path) {
   namespace fs = std::filesystem;
   const std::string where = "project '" + path.string() + "'";
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return MakeError(ErrorCode::kNotFound, where + " cannot be opened; check the path");
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return MakeError(ErrorCode::kNotFound, where + " does not exist; check the path");
+  // Only a regular file of a sane size: a directory, a FIFO or a device would crash, block or never end.
+  if (!fs::is_regular_file(path, ec)) {
+    return MakeError(ErrorCode::kIoError, where +
+                                              " is not a regular file (a directory or a device?); give the "
+                                              "*.scanreg.json file");
+  }
+  constexpr std::uintmax_t kMaxBytes = 256u << 20;
+  if (fs::file_size(path, ec) > kMaxBytes) {
+    return MakeError(ErrorCode::kParseError, where + " is larger than 256 MiB; it is not a scanreg project");
+  }
+  Expected<std::string> text = ReadWholeFile(path);
+  if (!text) return text.error();
   json j;
   try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
+    j = json::parse(*text);
+  } catch (const json::exception& e) {  // malformed, or a number out of range (1e309)
     return MakeError(ErrorCode::kParseError,
                      where + " is not valid JSON (" + e.what() + "); restore it from a backup or create a new project");
   }

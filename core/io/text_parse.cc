@@ -16,7 +16,10 @@ Expected<std::string> ReadWholeFile(const std::filesystem::path& path) {
     return MakeError(ErrorCode::kNotFound, path.string() + ": no such file; check the path");
   }
   if (std::filesystem::is_directory(path, ec)) {
-    return MakeError(ErrorCode::kIoError, path.string() + " is a directory, not a scan file");
+    return MakeError(ErrorCode::kIoError, path.string() + " is a directory, not a file");
+  }
+  if (!std::filesystem::is_regular_file(path, ec)) {  // a FIFO would block, a device never end
+    return MakeError(ErrorCode::kIoError, path.string() + " is not a regular file (a pipe or a device?)");
   }
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) {

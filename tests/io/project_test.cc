@@ -1,6 +1,7 @@
 #include "core/io/project.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <fstream>
 
@@ -96,6 +97,21 @@ TEST(ProjectTest, UnknownSchemaVersionAndGarbageAreClearErrors) {
   EXPECT_EQ(q.error().code, ErrorCode::kParseError);
 
   EXPECT_EQ(LoadProject(dir / "absent.scanreg.json").error().code, ErrorCode::kNotFound);
+
+  // What crashed or blocked in the fuzz run: a number beyond double, a directory, a FIFO.
+  std::ofstream(dir / "huge.scanreg.json")
+      << R"({"schema_version": 1, "scans": [{"name": "a", "index_in_file": 1e309}]})";
+  q = LoadProject(dir / "huge.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_EQ(q.error().code, ErrorCode::kParseError);
+  std::filesystem::create_directory(dir / "dir.scanreg.json");
+  q = LoadProject(dir / "dir.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_NE(q.error().message.find("not a regular file"), std::string::npos) << q.error().message;
+  ASSERT_EQ(::mkfifo((dir / "fifo.scanreg.json").c_str(), 0600), 0);
+  q = LoadProject(dir / "fifo.scanreg.json");  // returns at once: never opened for reading
+  ASSERT_FALSE(q.ok());
+  EXPECT_NE(q.error().message.find("not a regular file"), std::string::npos) << q.error().message;
 }
 
 TEST(ProjectTest, NonRigidPoseAndDuplicateNamesAreRejected) {
