@@ -10,6 +10,7 @@
 #include "core/io/pose_file.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
+#include "core/pipeline/register_project.h"
 
 namespace scanreg::cli {
 
@@ -29,6 +30,15 @@ int RunNew(const std::vector<std::string>& argv) {
   for (std::size_t i = 1; i < args->positional().size(); ++i) options.scan_files.emplace_back(args->positional()[i]);
   if (auto p = args->Get("poses")) options.poses = *p;
   if (auto p = args->Get("reference-poses")) options.reference_poses = *p;
+  // A new project never replaces a file: forgetting the project name (`new s01.ptx s02.ptx`) would
+  // otherwise turn the first scan into a project file, and an existing project would be lost.
+  std::error_code ec;
+  if (std::filesystem::exists(std::filesystem::symlink_status(args->positional()[0], ec))) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "new: '" + args->positional()[0] +
+                              "' already exists; give the new project a new name (PROJECT.scanreg.json first, then "
+                              "the scan files), or remove the old file first"));
+  }
   std::vector<std::filesystem::path> inputs = options.scan_files;
   for (const auto& p : {options.poses, options.reference_poses})
     if (p) inputs.push_back(*p);
@@ -60,6 +70,8 @@ int RunInfo(const std::vector<std::string>& argv) {
               project->links.size(), project->root ? project->root->c_str() : "(automatic)");
   std::printf("%-12s %-24s %11s %8s %11s  %-12s %10s %10s %10s %8s %s\n", "scan", "file", "size", "valid %", "points",
               "status", "x (m)", "y (m)", "z (m)", "yaw (°)", "reference error");
+  // Errors against the reference, relative to the root (the datum of the registration is the root's).
+  const std::vector<pipeline::ReferenceError> errors = pipeline::ReferenceErrors(*project);
   for (std::size_t i = 0; i < scans->size(); ++i) {
     const Scan& s = (*scans)[i];
     const io::ProjectScan& ps = project->scans[i];
@@ -67,10 +79,9 @@ int RunInfo(const std::vector<std::string>& argv) {
     const Eigen::Isometry3d& t = ps.world_from_scan;
     const double yaw = std::atan2(t.linear()(1, 0), t.linear()(0, 0)) * 180.0 / M_PI;
     std::string reference = "-";
-    if (ps.reference_world_from_scan && ps.registered) {
-      const PoseError e = ComparePoses(t, *ps.reference_world_from_scan);
+    if (i < errors.size() && errors[i].available) {
       char buf[64];
-      std::snprintf(buf, sizeof buf, "%.1f mm, %.4f°", e.position_m * 1000, e.angle_rad * 180 / M_PI);
+      std::snprintf(buf, sizeof buf, "%.1f mm, %.4f°", errors[i].position_m * 1000, errors[i].angle_rad * 180 / M_PI);
       reference = buf;
     } else if (ps.reference_world_from_scan) {
       reference = "(has reference)";

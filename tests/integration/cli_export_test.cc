@@ -162,6 +162,9 @@ TEST(CliExport, OutputsNeverReplaceInputs) {
       "merge " + p + " --voxel 0.2 --out " + Quote(dir / "m.ply") + " --points " + Quote(project_file),
       "export-poses " + p + " --format json --out " + p,
       "new " + Quote(scan) + " " + Quote(scan),
+      "new " + Quote(scan) + " " + Quote(dir / "p" / "s02.ptx"),  // the project name forgotten
+      "new " + p + " " + Quote(dir / "p" / "s02.ptx"),            // an existing project
+
       "convert " + Quote(scan) + " " + Quote(dir / "p" / ".." / "p" / "s01.ptx"),
   };
   for (const std::string& c : commands) {
@@ -178,6 +181,30 @@ TEST(CliExport, OutputsNeverReplaceInputs) {
   RunResult onto_project = RunCli("export-poses " + p + " --format json --out " + p);
   EXPECT_NE(onto_project.output.find("is the input file"), std::string::npos) << onto_project.output;
   EXPECT_EQ(ReadBytes(project_file), project_bytes);
+}
+
+// `info` compares poses with the reference relative to the root, as `register` and `report` do:
+// a registration in the root's own frame (root at the identity) shows zero error.
+TEST(CliExport, InfoReferenceErrorsAreRelativeToTheRoot) {
+  test::TempDir dir;
+  const auto project_file = TrueProject(dir);
+  Expected<io::Project> project = io::LoadProject(project_file);
+  ASSERT_TRUE(project.ok());
+  const Eigen::Isometry3d root_ref = *project->scans[0].reference_world_from_scan;
+  ASSERT_GT(root_ref.translation().norm() + Eigen::AngleAxisd(root_ref.linear()).angle(), 1e-3);
+  for (int i = 0; i < 2; ++i)
+    project->scans[i].world_from_scan = root_ref.inverse() * *project->scans[i].reference_world_from_scan;
+  ASSERT_TRUE(io::SaveProject(*project, project_file).ok());
+  RunResult info = RunCli("info " + Quote(project_file));
+  ASSERT_EQ(info.status, 0) << info.output;
+  const std::regex row("\n(s0[12]) .* (\\S+) mm, (\\S+)°");
+  int rows = 0;
+  for (auto m = std::sregex_iterator(info.output.begin(), info.output.end(), row); m != std::sregex_iterator(); ++m) {
+    ++rows;
+    EXPECT_EQ((*m)[2], "0.0") << (*m)[1] << "\n" << info.output;
+    EXPECT_EQ((*m)[3], "0.0000") << (*m)[1];
+  }
+  EXPECT_EQ(rows, 2) << info.output;
 }
 
 // Every command of `scanreg-cli --help` has a section in the man page, and every option of each
