@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 namespace scanreg::cli {
 namespace {
@@ -77,8 +78,9 @@ Expected<double> Args::GetDouble(const std::string& name, double fallback, doubl
   double out = 0;
   const auto [ptr, ec] = std::from_chars(v->data(), v->data() + v->size(), out);
   if (ec != std::errc() || ptr != v->data() + v->size() || !std::isfinite(out) || out < min || out > max) {
-    return BadOption(command_, "--" + name + " must be a number from " + std::to_string(min) + " to " +
-                                   std::to_string(max) + ", not '" + *v + "'");
+    char range[96];
+    std::snprintf(range, sizeof range, "%g to %g", min, max);
+    return BadOption(command_, "--" + name + " must be a number from " + range + ", not '" + *v + "'");
   }
   return out;
 }

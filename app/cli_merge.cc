@@ -31,7 +31,7 @@ int RunMerge(const std::vector<std::string>& argv) {
   const auto out = args->Get("out");
   if (!out) return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: --out MESH.ply|.obj|.stl is required"));
   pipeline::MergeOptions options;
-  auto voxel = args->GetDouble("voxel", options.voxel_m, -1e9, 1e9);
+  auto voxel = args->GetDouble("voxel", options.voxel_m, 1e-4, 1000.0);  // 0.1 mm .. 1 km
   if (!voxel) return Fail(voxel.error());
   options.voxel_m = *voxel;
   auto sigma = args->GetDouble("sigma", options.sigma_m, 1e-6, 1.0);  // a range noise beyond 1 m means nothing

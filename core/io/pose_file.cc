@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "core/common/atomic_file.h"
@@ -79,6 +80,11 @@ Expected<std::vector<NamedPose>> ReadBunConf(const std::filesystem::path& path) 
     }
     Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);  // (w, x, y, z)
     if (q.norm() < 1e-6) return ParseErr(path, n, "the quaternion is zero; it must be a rotation");
+    if (std::abs(q.norm() - 1.0) > 1e-3) {  // normalised, but a typo in a digit is likely
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.6g", q.norm());
+      LogWarning(AtLine(path, n) + "the quaternion's norm is " + buf + ", not 1; it was normalised — check the line");
+    }
     NamedPose pose;
     pose.scan = std::string(file);
     pose.world_from_scan.linear() = q.normalized().toRotationMatrix().transpose();

@@ -74,6 +74,16 @@ TEST(PoseFile, BunConfErrorsNameTheLine) {
   EXPECT_NEAR((*r)[0].world_from_scan.translation().y(), 2.0, 1e-12);
   EXPECT_NE(warning.find("kw.conf, line 2:"), std::string::npos) << warning;
   EXPECT_NE(warning.find("'mesh'"), std::string::npos) << warning;
+  warning.clear();
+  SetLogHandler([&](LogLevel level, const std::string& m) {
+    if (level == LogLevel::kWarning) warning += m;
+  });
+  WriteBytes(dir / "norm.conf", "bmesh a.ply 0 0 0 0 0 0 1.0000001\nbmesh b.ply 0 0 0 0 0 0 1.955586\n");
+  r = ReadBunConf(dir / "norm.conf");
+  SetLogHandler({});
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(warning.find("line 1"), std::string::npos) << "rounding is no typo: " << warning;
+  EXPECT_NE(warning.find("norm.conf, line 2: the quaternion's norm is 1.95559"), std::string::npos) << warning;
   WriteBytes(dir / "only_mesh.conf", "mesh a.ply 0 0 0 0 0 0 1\n");
   EXPECT_FALSE(ReadBunConf(dir / "only_mesh.conf").ok()) << "no scan pose at all is still an error";
 
