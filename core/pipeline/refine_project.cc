@@ -40,7 +40,7 @@ double Overlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& chi
 }
 
 std::string Format(const char* fmt, double a, double b) {
-  char buf[200];
+  char buf[400];
   std::snprintf(buf, sizeof buf, fmt, a, b);
   return buf;
 }
@@ -74,7 +74,14 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     const LinkThresholds& t = options.thresholds;
     std::string reason;
     link.status = io::LinkStatus::kOk;
-    if (moved > 2 * options.overlap_distance_m) {
+    if (fine->iterations == 0) {  // not one step: the pose is the start pose, with no evidence of ours
+      link.status = io::LinkStatus::kFailed;
+      link.reason = Format(
+          "the fine step could not start: too few correspondences within the overlap distance %.1f mm at "
+          "samples of %.1f mm; they may be too large for this scan's size (set the range noise and the overlap "
+          "distance for this data)",
+          1e3 * options.overlap_distance_m, 1e3 * options.dense_icp.voxel_m);
+    } else if (moved > 2 * options.overlap_distance_m) {
       link.status = io::LinkStatus::kFailed;
       link.reason = Format(
           "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "

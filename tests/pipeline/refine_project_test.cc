@@ -116,6 +116,29 @@ TEST(RegisterFromCurrentPoses, LinksWhoseLoopsDoNotCloseAreFailedNotChained) {
   EXPECT_EQ(wrong, 0) << "a scan registered far from the truth";
 }
 
+// Street-sized dense ICP on a 20 cm object cannot take a single step (5 cm samples): such a link is
+// failed with that reason, not "weak: stopped at the iteration cap" after 0 iterations.
+TEST(RegisterFromCurrentPoses, AFineStepThatCannotStartFailsTheLink) {
+  SCANREG_REQUIRE_REALDATA(data);
+  const std::vector<Scan> scans = PerturbedBunny(data, 0.0, 0.0);  // at bun.conf
+  ASSERT_EQ(scans.size(), 4u);
+  RegisterOptions o;  // defaults: dense ICP, 12 mm noise, 0.10 m overlap distance
+  o.from_current_poses = true;
+  o.root = "bun000";
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  int stuck = 0;
+  for (const io::LinkRecord& l : r->links) {
+    if (l.iterations != 0) continue;
+    ++stuck;
+    EXPECT_EQ(l.status, io::LinkStatus::kFailed) << l.child << ": " << l.reason;
+    EXPECT_NE(l.reason.find("could not start"), std::string::npos) << l.reason;
+  }
+  EXPECT_GT(stuck, 0) << "the case this test is about did not occur";
+}
+
 TEST(RegisterFromCurrentPoses, StanfordBunnyPerturbedBackToBunConf) {
   SCANREG_REQUIRE_REALDATA(data);
   const std::vector<Scan> scans = PerturbedBunny(data, 3.0, 3.0);
