@@ -144,12 +144,13 @@ int RunExportPoses(const std::vector<std::string>& argv) {
                      ? "left out; a matrix file cannot say a scan is unregistered"
                      : "left out; --include-unregistered lists them with status 'unregistered' and no pose");
   }
+  // The file, or each matrix file of the folder, must not be an input.
+  if (Status s = io::CheckNotAnInput(*out, inputs, "export-poses: --out"); !s) return Fail(s.error());
   for (const io::NamedPose& p : poses) {
-    const std::filesystem::path file =
-        format == "txt" ? std::filesystem::path(*out) / (p.scan + ".txt") : std::filesystem::path(*out);
+    if (format != "txt") break;
+    const std::filesystem::path file = std::filesystem::path(*out) / (p.scan + ".txt");
     if (Status s = io::CheckNotAnInput(file, inputs, "export-poses: --out"); !s) return Fail(s.error());
   }
-  if (Status s = io::CheckNotAnInput(*out, inputs, "export-poses: --out"); !s) return Fail(s.error());
   if (format == "json" || format == "csv") {
     Status written = format == "json" ? io::WritePosesJson(*out, poses) : io::WritePosesCsv(*out, poses);
     if (!written) return Fail(written.error());

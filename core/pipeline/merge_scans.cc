@@ -1,8 +1,8 @@
 #include "core/pipeline/merge_scans.h"
 
 #include "core/io/las_writer.h"
+#include "core/io/text_parse.h"
 
-#include <cctype>
 #include <string>
 
 #include "core/merge/mesh_io.h"
@@ -43,8 +43,7 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return merge::WriteMeshFile(path, mesh); }
 
 Status ValidateMeshPath(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = io::LowerExtension(path);
   if (ext == ".ply" || ext == ".obj" || ext == ".stl") return Status::Ok();
   return MakeError(ErrorCode::kInvalidArgument,
                    "merge: the mesh is written as PLY, OBJ or STL; give the mesh file a .ply, .obj or .stl name, "
@@ -53,8 +52,7 @@ Status ValidateMeshPath(const std::filesystem::path& path) {
 }
 
 Status ValidatePointsPath(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = io::LowerExtension(path);
   if (ext == ".ply" || ext == ".las") return Status::Ok();
   return MakeError(
       ErrorCode::kInvalidArgument,
@@ -64,8 +62,7 @@ Status ValidatePointsPath(const std::filesystem::path& path) {
 
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
   if (Status s = ValidatePointsPath(path); !s) return s;
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = io::LowerExtension(path);
   if (ext == ".las") {
     io::LasCloud cloud;
     for (const auto& v : mesh.vertices) cloud.points.push_back(mesh.origin + v.cast<double>());
