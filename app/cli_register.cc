@@ -35,12 +35,15 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   for (const auto& s : r.scans) {
     if (s.parent >= 0) std::printf("  %s <- %s\n", scans[s.parent].name.c_str(), s.name.c_str());
   }
-  std::printf("\n%-8s %-8s %-14s %7s %8s %8s %10s %8s %9s %6s %7s  %-6s %s\n", "parent", "child", "method", "matches",
-              "reliable", "inliers", "consistent", "RMS mm", "overlap %", "iter", "time s", "status", "reason");
+  std::printf("\n%-8s %-8s %-22s %11s %8s %11s %10s %8s %9s %10s %6s %7s  %-6s %s\n", "parent", "child", "method",
+              "sift+fpfh", "reliable", "inl s+f", "consistent", "RMS mm", "overlap %", "conflict %", "iter", "time s", "status", "reason");
   for (const io::LinkRecord& l : r.links) {
-    std::printf("%-8s %-8s %-14s %7d %8d %8d %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(),
-                l.child.c_str(), (l.loop_check ? "check:" + l.method : l.method).c_str(), l.matches, l.reliable,
-                l.ransac_inliers, l.consistent, l.rms_m * 1000, l.overlap * 100, l.conflict * 100, l.iterations,
+    const std::string matches = std::to_string(l.matches) + "+" + std::to_string(l.geometric_matches);
+    const std::string inliers =
+        std::to_string(l.ransac_inliers - l.geometric_inliers) + "+" + std::to_string(l.geometric_inliers);
+    std::printf("%-8s %-8s %-22s %11s %8d %11s %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(),
+                l.child.c_str(), (l.loop_check ? "check:" + l.method : l.method).c_str(), matches.c_str(), l.reliable,
+                inliers.c_str(), l.consistent, l.rms_m * 1000, l.overlap * 100, l.conflict * 100, l.iterations,
                 l.seconds, io::LinkStatusName(l.status), l.reason.c_str());
   }
   bool any_reference = false;
@@ -93,8 +96,10 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
                      {"status", io::LinkStatusName(l.status)},
                      {"reason", l.reason},
                      {"matches", l.matches},
+                     {"geometric_matches", l.geometric_matches},
                      {"reliable", l.reliable},
                      {"ransac_inliers", l.ransac_inliers},
+                     {"geometric_inliers", l.geometric_inliers},
                      {"consistent", l.consistent},
                      {"rms_m", l.rms_m},
                      {"overlap", l.overlap},
@@ -178,6 +183,9 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"fine", true, false,
         "keypoints|dense|em|projective-icp   fine method: keypoint ICP (W), dense point-to-plane "
         "ICP (default), S's EM on the range images, or projective ICP (S's [15])"},
+       {"features", true, false,
+        "both|sift|fpfh   correspondences: SIFT on the reflectance (W), FPFH on the geometry, or "
+        "both into one estimator (default); levelled scans also get plan-view poses"},
        {"overlap-distance", true, false,
         "METRES   a child point this near the parent's surface overlaps (default "
         "0.10; with --coarse none a few times the current pose error)"},

@@ -17,6 +17,7 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"seed", true, false, "S        random seed (default 1)"},
     {"scene", true, false, "street|windows   scene kind (default street)"},
     {"far-station", false, false, "       add one station far away (no overlap)"},
+    {"no-reflectance", false, false, "       write a constant reflectance of 0.5 (as some exporters do): geometry only"},
     {"out", true, false, "DIR      output folder (required for simulate)"},
 };
 
@@ -48,6 +49,7 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   options.scene.seed = options.seed;
   options.scene.kind = scene == "windows" ? SceneOptions::Kind::kRepeatedWindows : SceneOptions::Kind::kStreet;
   options.add_far_station = args.Has("far-station");
+  options.scanner.reflectance = !args.Has("no-reflectance");
   if (Status s = options.Validate(); !s) return s.error();
   return options;
 }

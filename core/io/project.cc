@@ -53,8 +53,10 @@ json LinkToJson(const LinkRecord& l) {
               {"status", LinkStatusName(l.status)},
               {"reason", l.reason},
               {"matches", l.matches},
+              {"geometric_matches", l.geometric_matches},
               {"reliable", l.reliable},
               {"ransac_inliers", l.ransac_inliers},
+              {"geometric_inliers", l.geometric_inliers},
               {"consistent", l.consistent},
               {"rms_m", l.rms_m},
               {"overlap", l.overlap},
@@ -78,6 +80,8 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
     l.matches = j.value("matches", 0);
     l.reliable = j.value("reliable", 0);
     l.ransac_inliers = j.value("ransac_inliers", 0);
+    l.geometric_matches = j.value("geometric_matches", 0);
+    l.geometric_inliers = j.value("geometric_inliers", 0);
     l.consistent = j.value("consistent", 0);
     l.rms_m = j.value("rms_m", 0.0);
     l.overlap = j.value("overlap", 0.0);

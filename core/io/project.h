@@ -25,9 +25,11 @@ struct LinkRecord {
   std::string method;  // e.g. "epnp+keypoints"
   LinkStatus status = LinkStatus::kFailed;
   std::string reason;  // why weak / failed; empty when ok
-  int matches = 0;
-  int reliable = 0;
+  int matches = 0;            // SIFT matches
+  int geometric_matches = 0;  // FPFH matches (issue 11, item 2)
+  int reliable = 0;           // correspondences with reliable 3D points (SIFT) plus the FPFH ones
   int ransac_inliers = 0;
+  int geometric_inliers = 0;  // of ransac_inliers, how many came from FPFH (the rest from SIFT)
   int consistent = 0;
   double rms_m = 0.0;
   double overlap = 0.0;   // fraction [0, 1]

@@ -12,14 +12,6 @@ namespace {
 
 Error Cancelled() { return MakeError(ErrorCode::kCancelled, "pair registration cancelled"); }
 
-Expected<ScanFeatures> Features(const Scan& scan, const RegisterOptions& options) {
-  Expected<ScanFeatures> f = options.feature_cache_dir.empty()
-                                 ? DetectFeatures(scan, options.sift)
-                                 : LoadOrDetectFeatures(scan, options.sift, options.feature_cache_dir);
-  if (!f) return MakeError(f.error().code, "scan '" + scan.name + "': " + f.error().message);
-  return f;
-}
-
 // Up to max_count valid points of the scan, evenly thinned, mapped by `to_frame`.
 std::vector<Eigen::Vector3d> OverlayPoints(const Scan& scan, const Eigen::Isometry3d& to_frame, int max_count) {
   std::vector<Eigen::Vector3d> pts;
@@ -54,13 +46,13 @@ Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, cons
   PairInspection out;
   PreparedScan prepared[2];
   const Scan* scans[2] = {&parent, &child};
+  RegisterOptions prepare_options = options;
+  prepare_options.geometric.voxel_m = GeometricVoxel({&parent, &child}, options);
   for (int k = 0; k < 2; ++k) {
     if (cancel.IsCancelled()) return Cancelled();
     progress.Report(0.25 * k, "features of " + scans[k]->name);
-    Expected<ScanFeatures> f = Features(*scans[k], options);
-    if (!f) return f.error();
-    prepared[k].features = std::move(*f);
-    PrepareScan(*scans[k], options, &prepared[k]);
+    bool cached = false;
+    if (Status s = PrepareScanFeatures(*scans[k], prepare_options, &prepared[k], &cached, cancel); !s) return s.error();
   }
   progress.Report(0.5, "matching " + child.name + " with " + parent.name);
   SubProgress match_progress(progress, 0.5, 0.6);
@@ -70,7 +62,8 @@ Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, cons
   out.matches = BothWays(*table, 0, 1);
 
   progress.Report(0.6, "registering " + child.name + " to " + parent.name);
-  out.result = RegisterPair(prepared[0], prepared[1], out.matches, options, cancel);
+  out.result = RegisterPair(prepared[0], prepared[1], out.matches,
+                            MatchGeometric(prepared[0].geometric, prepared[1].geometric), options, cancel);
   if (cancel.IsCancelled()) return Cancelled();
   out.coarse_inlier.assign(out.matches.size(), 0);
   for (int m : out.result.coarse_inlier_matches) out.coarse_inlier[m] = 1;

@@ -13,6 +13,21 @@ const char* FineMethodName(FineMethod method) {
 }
 const char* CoarseMethodName(CoarseMethod method) { return method == CoarseMethod::kEpnp ? "epnp" : "3d"; }
 
+const char* FeatureSourcesName(FeatureSources sources) {
+  switch (sources) {
+    case FeatureSources::kSift: return "sift";
+    case FeatureSources::kGeometric: return "fpfh";
+    case FeatureSources::kBoth: return "both";
+  }
+  return "?";
+}
+
+const std::vector<FeatureSources>& AllFeatureSources() {
+  static const std::vector<FeatureSources> all = {FeatureSources::kBoth, FeatureSources::kSift,
+                                                  FeatureSources::kGeometric};
+  return all;
+}
+
 const std::vector<FineMethod>& AllFineMethods() {
   static const std::vector<FineMethod> all = {FineMethod::kDense, FineMethod::kKeypoints, FineMethod::kEm,
                                               FineMethod::kProjectiveIcp};
@@ -25,11 +40,11 @@ const std::vector<CoarseMethod>& AllCoarseMethods() {
 }
 
 Status LinkThresholds::Validate() const {
-  if (min_inliers < 3 || weak_inliers < min_inliers || !(min_overlap >= 0 && min_overlap <= weak_overlap &&
+  if (weak_inliers < 3 || !(min_overlap >= 0 && min_overlap <= weak_overlap &&
                                                          weak_overlap <= 1) ||
       !(weak_rms_m > 0 && weak_rms_m <= max_rms_m) || !(weak_conflict >= 0 && weak_conflict <= max_conflict)) {
     return MakeError(ErrorCode::kInvalidArgument,
-                     "link thresholds: need 3 <= min_inliers <= weak_inliers, 0 <= min_overlap <= weak_overlap <= 1 "
+                     "link thresholds: need weak_inliers >= 3, 0 <= min_overlap <= weak_overlap <= 1 "
                      "and 0 < weak_rms <= max_rms");
   }
   return Status::Ok();
@@ -39,6 +54,9 @@ Status RegisterOptions::Validate() const {
   for (Status s : {sift.Validate(), match.Validate(), reliability.Validate(), coarse.Validate(),
                    keypoint_icp.Validate(), dense_icp.Validate(), thresholds.Validate()}) {
     if (!s) return s;
+  }
+  if (UsesGeometric(features)) {
+    if (Status s = geometric.Validate(); !s) return s;
   }
   if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
     return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m");

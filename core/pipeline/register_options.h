@@ -11,6 +11,7 @@
 #include "core/features/matching.h"
 #include "core/features/sift.h"
 #include "core/registration/coarse.h"
+#include "core/registration/geometric_features.h"
 #include "core/registration/icp.h"
 #include "core/registration/reliable_points.h"
 
@@ -22,6 +23,15 @@ enum class FineMethod {
   kEm,             // S §3.2 on the range images (point-to-plane M-step, core/registration/em_align.h)
   kProjectiveIcp,  // S's baseline [15]: correspondences along the parent's lines of sight
 };
+// Where the correspondences of the coarse step come from (issue 11, item 2): W's SIFT on the
+// reflectance panorama, FPFH on the geometry (scans without reflectance, unorganized clouds,
+// low resolution), or both into one estimator.
+enum class FeatureSources { kSift, kGeometric, kBoth };
+const char* FeatureSourcesName(FeatureSources sources);
+const std::vector<FeatureSources>& AllFeatureSources();
+inline bool UsesSift(FeatureSources s) { return s != FeatureSources::kGeometric; }
+inline bool UsesGeometric(FeatureSources s) { return s != FeatureSources::kSift; }
+
 const char* FineMethodName(FineMethod method);
 const char* CoarseMethodName(CoarseMethod method);
 // Every method, in the order the GUI lists them (add new methods here too).
@@ -31,8 +41,9 @@ const std::vector<CoarseMethod>& AllCoarseMethods();
 // When a link is ok, weak or failed. A failed link is not chained; a weak one is chained but
 // reported (the user may accept or reject it).
 struct LinkThresholds {
-  int min_inliers = 8;          // fewer coarse inliers: failed (CoarseOptions::min_inliers)
-  int weak_inliers = 15;        // fewer: weak
+  // Fewer consistent correspondences than the coarse step's computed requirement
+  // (CoarseOptions::max_false_pose_probability): failed; fewer than this: weak.
+  int weak_inliers = 15;
   double min_overlap = 0.05;    // fraction of the child's samples near the parent; less: failed
   double weak_overlap = 0.15;   // less: weak
   double max_rms_m = 0.10;      // RMS of the overlap distances above this: failed
@@ -43,7 +54,9 @@ struct LinkThresholds {
 };
 
 struct RegisterOptions {
+  FeatureSources features = FeatureSources::kBoth;
   SiftOptions sift;
+  GeometricOptions geometric;  // voxel_m 0: the median of SuggestVoxel over the project's scans
   MatchOptions match;              // ratio t_des = 0.66 (W)
   ReliabilityOptions reliability;  // t_std = 0.1 m (W)
   CoarseOptions coarse;            // method: kEpnp (W) or k3d

@@ -9,6 +9,7 @@
 #include "core/geometry/transform.h"
 #include "core/pipeline/fine_align.h"
 #include "core/registration/consistency.h"
+#include "core/registration/plan_view.h"
 #include "core/registration/point_index.h"
 #include "core/registration/surface_distance.h"
 #include "core/registration/visibility.h"
@@ -17,14 +18,6 @@
 namespace scanreg::pipeline {
 namespace {
 
-std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan) {
-  std::vector<Eigen::Vector3d> pts;
-  pts.reserve(scan.CountValid());
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i]) pts.push_back(scan.points[i].cast<double>());
-  return pts;
-}
-
 std::string Format(const char* fmt, double a, double b = 0.0) {
   char buf[160];
   std::snprintf(buf, sizeof buf, fmt, a, b);
@@ -32,16 +25,17 @@ std::string Format(const char* fmt, double a, double b = 0.0) {
 }
 
 // Fills link.status and link.reason from the evidence and the thresholds.
-void Classify(const LinkThresholds& t, io::LinkRecord& link) {
+// required: the support a pose needs (the coarse step's chance model).
+void Classify(const LinkThresholds& t, int required, io::LinkRecord& link) {
   std::string reason;
-  if (link.consistent < t.min_inliers) {
+  if (link.consistent < required) {
     link.status = io::LinkStatus::kFailed;
     link.reason = "only " + std::to_string(link.consistent) + " consistent correspondences (minimum " +
-                  std::to_string(t.min_inliers) + ")";
+                  std::to_string(required) + ")";
   } else if (!(reason = SurfaceFailure(t, link)).empty()) {
     link.status = io::LinkStatus::kFailed;
     link.reason = reason;
-  } else if (link.consistent < t.weak_inliers) {
+  } else if (link.consistent < std::max(required, t.weak_inliers)) {
     link.status = io::LinkStatus::kWeak;
     link.reason = "few consistent correspondences (" + std::to_string(link.consistent) + ")";
   } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
@@ -83,6 +77,35 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   prepared->scan = &scan;
   prepared->confidence = ConfidenceMap(scan, options.reliability);
   prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
+  prepared->plan = MakePlanView(prepared->geometric);
+  if (options.fine == FineMethod::kDense && !prepared->samples.empty())
+    prepared->surface = std::make_shared<IcpSurface>(prepared->samples, options.dense_icp);
+}
+
+int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const std::vector<GeometricMatch>& geometric,
+                    const RegisterOptions& options) {
+  int weight = 0;
+  const bool levelled = parent.geometric.levelled && child.geometric.levelled;
+  if (geometric.size() >= 8) {
+    const Eigen::Isometry3d lp = parent.geometric.Levelling(), lc = child.geometric.Levelling();
+    std::vector<Correspondence3d> corr;
+    for (const GeometricMatch& g : geometric)
+      corr.push_back({lp * parent.geometric.points[g.parent], lc * child.geometric.points[g.child]});
+    CoarseOptions o = options.coarse;
+    o.method = CoarseMethod::k3d;
+    o.levelled = levelled;
+    o.max_iterations = 2000;
+    o.inlier_threshold_m = 1.5 * parent.geometric.voxel_m;
+    CancelToken never;
+    if (Expected<CoarseResult> c = EstimateCoarse(corr, o, never); c.ok()) weight += c->inliers;
+  }
+  if (parent.plan.usable && child.plan.usable) {
+    const std::vector<PlanHypothesis> h = PlanHypotheses(parent.plan, child.plan);
+    // Unrelated street scans still correlate at about 0.4-0.5 (measured: 10 and 15 m spacing,
+    // neighbours 0.66-0.83, others 0.37-0.62); every levelled pair stays a candidate (weight >= 1).
+    if (!h.empty()) weight += std::max(1, static_cast<int>(std::lround(100.0 * (h.front().score - 0.5))));
+  }
+  return weight;
 }
 
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
@@ -94,7 +117,9 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(child_pts.size());
   for (const Eigen::Vector3d& c : child_pts) queries.push_back(parent_from_child * c);
-  const std::vector<double> d = PointToSurfaceDistances(PointIndex(parent_pts), parent_pts, queries, max_distance_m);
+  const std::vector<double> d =
+      parent.surface ? PointToSurfaceDistances(*parent.surface->index, parent_pts, queries, max_distance_m)
+                     : PointToSurfaceDistances(PointIndex(parent_pts), parent_pts, queries, max_distance_m);
   double sum_sq = 0.0;
   long overlapping = 0;
   for (double di : d) {
@@ -167,7 +192,8 @@ Hypothesis Refine(const PreparedScan& parent, const PreparedScan& child, const s
 }  // namespace
 
 PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, const std::vector<FeatureMatch>& matches,
-                        const RegisterOptions& options, const CancelToken& cancel) {
+                        const std::vector<GeometricMatch>& geometric, const RegisterOptions& options,
+                        const CancelToken& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   PairResult result;
   io::LinkRecord& link = result.link;
@@ -175,6 +201,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.child = child.scan->name;
   link.method = std::string(CoarseMethodName(options.coarse.method)) + "+" + FineMethodName(options.fine);
   link.matches = static_cast<int>(matches.size());
+  link.geometric_matches = static_cast<int>(geometric.size());
   auto finish = [&]() -> PairResult {
     link.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return result;
@@ -200,64 +227,163 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     ranges.push_back(c->norm());
     match_of_corr.push_back(static_cast<int>(&m - matches.data()));
   }
+  const int n_sift = static_cast<int>(corr.size());
+  // FPFH samples are voxel centroids: they sit up to about a voxel from their partner.
+  const double geometric_threshold = 1.5 * parent.geometric.voxel_m;
+  for (const GeometricMatch& g : geometric)
+    corr.push_back({parent.geometric.points[g.parent], child.geometric.points[g.child], geometric_threshold});
   link.reliable = static_cast<int>(corr.size());
-  if (corr.empty()) return fail("no reliable correspondence: the scans share no matched features");
+  const bool plan_views = parent.plan.usable && child.plan.usable;
+  if (corr.empty() && !plan_views) return fail("no reliable correspondence: the scans share no matched features");
 
   // Keypoint localisation error grows with range: about two grid steps of angle (ours; W uses
   // fixed thresholds, which at 15 m and 0.24° would reject most true pairs).
   const double angular = 2.0 * std::max(AngularStep(*parent.scan), AngularStep(*child.scan));
-  std::nth_element(ranges.begin(), ranges.begin() + ranges.size() / 2, ranges.end());
   CoarseOptions coarse_options = options.coarse;
-  coarse_options.inlier_threshold_m = std::max(coarse_options.inlier_threshold_m, angular * ranges[ranges.size() / 2]);
+  if (!ranges.empty()) {
+    std::nth_element(ranges.begin(), ranges.begin() + ranges.size() / 2, ranges.end());
+    coarse_options.inlier_threshold_m = std::max(coarse_options.inlier_threshold_m, angular * ranges[ranges.size() / 2]);
+  }
 
-  // W §2 step 7: coarse registration.
-  Expected<CoarseResult> coarse = EstimateCoarse(corr, coarse_options, cancel);
-  if (!coarse) return fail("coarse registration failed: " + coarse.error().message);
-  link.ransac_inliers = coarse->inliers;
-  link.iterations = coarse->iterations;
-  result.coarse_parent_from_child = coarse->parent_from_child;
-  result.coarse_ok = !coarse->ambiguous;
-  for (int k : coarse->inlier_indices) result.coarse_inlier_matches.push_back(match_of_corr[k]);
+  // W §2 step 7: coarse registration, in levelled frames when both scans are levelled (issue 11,
+  // item 3: heading + translation from 2 correspondences).
+  const bool levelled = coarse_options.method == CoarseMethod::k3d && parent.geometric.levelled &&
+                        child.geometric.levelled;
+  const Eigen::Isometry3d level_parent = parent.geometric.Levelling();
+  const Eigen::Isometry3d level_child = child.geometric.Levelling();
+  const auto unlevel = [&](const Eigen::Isometry3d& t) { return level_parent.inverse() * t * level_child; };
+  coarse_options.levelled = levelled;
+  std::vector<Correspondence3d> levelled_corr = corr;
+  if (levelled)
+    for (Correspondence3d& c : levelled_corr) c = {level_parent * c.parent, level_child * c.child, c.tolerance_m};
+  Expected<CoarseResult> coarse = EstimateCoarse(levelled_corr, coarse_options, cancel);
+  if (!coarse && coarse.error().code == ErrorCode::kCancelled) return fail("cancelled");
+  if (coarse) {
+    if (levelled) {
+      coarse->parent_from_child = unlevel(coarse->parent_from_child);
+      if (coarse->competitor) coarse->competitor = unlevel(*coarse->competitor);
+      link.method += " levelled";
+    }
+    link.ransac_inliers = coarse->inliers;
+    link.iterations = coarse->iterations;
+    result.coarse_parent_from_child = coarse->parent_from_child;
+    result.coarse_ok = !coarse->ambiguous;
+    for (int k : coarse->inlier_indices) {
+      if (k < n_sift) {
+        result.coarse_inlier_matches.push_back(match_of_corr[k]);
+      } else {
+        ++link.geometric_inliers;
+      }
+    }
+  }
+  // Plan-view poses (levelled scans, plan_view.h) when the correspondences do not settle the pose.
+  std::vector<PlanHypothesis> plan;
+  if (plan_views && (!coarse || coarse->ambiguous || coarse->inliers < options.thresholds.weak_inliers)) {
+    plan = PlanHypotheses(parent.plan, child.plan);
+  }
+  if (!coarse && plan.empty()) return fail("coarse registration failed: " + coarse.error().message);
 
-  // Fine registration of the best hypothesis and of its distinct competitor (repeated façades):
-  // the surfaces, not the feature counts, decide between them (beyond W).
+  // Consistent correspondences at a pose: SIFT within the range-noise threshold (W §2 step 8),
+  // FPFH within their sampling threshold.
+  const std::vector<Correspondence3d> sift_corr(corr.begin(), corr.begin() + n_sift);
+  const std::vector<Correspondence3d> geometric_corr(corr.begin() + n_sift, corr.end());
   const double threshold = ConsistencyThreshold(options.range_sigma_m);
+
+  // Fine registration of every start: the correspondences' best pose and its distinct competitor
+  // (repeated façades), and the plan-view poses. The surfaces, not the feature counts, decide
+  // between them (beyond W). All but the first are screened with a short dense ICP first.
+  struct Start {
+    Eigen::Isometry3d pose;
+    bool from_plan;
+  };
+  std::vector<Start> starts;
+  if (coarse) {
+    starts.push_back({coarse->parent_from_child, false});
+    if (coarse->competitor && coarse->competitor_support >= 3) starts.push_back({*coarse->competitor, false});
+  }
+  for (const PlanHypothesis& h : plan) starts.push_back({unlevel(h.parent_from_child), true});
+  RegisterOptions screen = options;
+  screen.dense_icp.max_correspondence_schedule_m = {options.dense_icp.max_correspondence_schedule_m.front()};
+  screen.dense_icp.max_iterations_per_stage = 10;
+  screen.dense_icp.max_samples = std::min(options.dense_icp.max_samples, 2000);
   std::vector<Hypothesis> hyps;
-  hyps.push_back(Refine(parent, child, corr, coarse->parent_from_child, threshold, angular, options, cancel));
-  if (coarse->competitor && coarse->competitor_support >= 3) {
-    // Screen the competitor with a short dense ICP first: most competitors end far below the best.
-    RegisterOptions screen = options;
-    screen.dense_icp.max_correspondence_schedule_m = {options.dense_icp.max_correspondence_schedule_m.front()};
-    screen.dense_icp.max_iterations_per_stage = 10;
-    Hypothesis h = Refine(parent, child, corr, *coarse->competitor, threshold, angular, screen, cancel);
-    if (Score(h) >= 0.5 * options.coarse.ambiguity_ratio * Score(hyps.front())) {
-      h = Refine(parent, child, corr, h.parent_from_child, threshold, angular, options, cancel);
+  std::vector<bool> hyp_from_plan;
+  for (const Start& st : starts) {
+    if (cancel.IsCancelled()) return fail("cancelled");
+    Hypothesis h;
+    if (hyps.empty()) {
+      h = Refine(parent, child, sift_corr, st.pose, threshold, angular, options, cancel);
+    } else {
+      h = Refine(parent, child, sift_corr, st.pose, threshold, angular, screen, cancel);
+      double top = 0.0;
+      for (const Hypothesis& o : hyps) top = std::max(top, Score(o));
+      if (Score(h) >= 0.5 * options.coarse.ambiguity_ratio * top) {
+        h = Refine(parent, child, sift_corr, h.parent_from_child, threshold, angular, options, cancel);
+      }
     }
     hyps.push_back(h);
+    hyp_from_plan.push_back(st.from_plan);
   }
   if (cancel.IsCancelled()) return fail("cancelled");
-  std::sort(hyps.begin(), hyps.end(), [](const Hypothesis& a, const Hypothesis& b) { return Score(a) > Score(b); });
-  const Hypothesis& best = hyps.front();
+  std::vector<int> rank(hyps.size());
+  for (std::size_t i = 0; i < rank.size(); ++i) rank[i] = static_cast<int>(i);
+  std::stable_sort(rank.begin(), rank.end(), [&](int a, int b) { return Score(hyps[a]) > Score(hyps[b]); });
+  const Hypothesis& best = hyps[rank[0]];
+  const bool best_from_plan = hyp_from_plan[rank[0]];
+  if (best_from_plan) {
+    link.method = "plan+" + std::string(FineMethodName(options.fine)) + " levelled";
+    result.coarse_parent_from_child = starts[rank[0]].pose;
+    result.coarse_ok = true;
+  }
   link.parent_from_child = best.parent_from_child;
   link.iterations += best.iterations;
   link.overlap = best.evidence.overlap;
   link.rms_m = best.evidence.rms_m;
   link.conflict = best.evidence.conflict;
-  link.consistent = static_cast<int>(ConsistentIndices(corr, best.parent_from_child, threshold, angular).size());
-  // Ambiguous only when both poses fit well; when neither does, the evidence below fails the link.
-  if (hyps.size() > 1 && Score(hyps[0]) >= options.thresholds.weak_overlap &&
-      Distinct(hyps[0].parent_from_child, hyps[1].parent_from_child, options.coarse) &&
-      Score(hyps[1]) >= options.coarse.ambiguity_ratio * Score(hyps[0])) {
+  link.consistent =
+      static_cast<int>(ConsistentIndices(sift_corr, best.parent_from_child, threshold, angular).size() +
+                       ConsistentIndices(geometric_corr, best.parent_from_child, geometric_threshold).size());
+  // The best distinct competitor. Ambiguous only when both poses fit well; when neither does, the
+  // evidence below fails the link.
+  const Hypothesis* rival = nullptr;
+  for (std::size_t k = 1; k < rank.size() && !rival; ++k)
+    if (Distinct(best.parent_from_child, hyps[rank[k]].parent_from_child, options.coarse)) rival = &hyps[rank[k]];
+  if (rival && Score(best) >= options.thresholds.weak_overlap &&
+      Score(*rival) >= options.coarse.ambiguity_ratio * Score(best)) {
     return fail(Format("ambiguous: two poses %.2f m apart fit the surfaces almost equally (score %.2f vs ",
-                       (hyps[0].parent_from_child.translation() - hyps[1].parent_from_child.translation()).norm(),
-                       Score(hyps[0])) +
+                       (best.parent_from_child.translation() - rival->parent_from_child.translation()).norm(),
+                       Score(best)) +
                 Format("%.2f: overlap discounted by free-space conflicts); repeated structure — set the parent by hand",
-                       Score(hyps[1])));
+                       Score(*rival)));
   }
-  Classify(options.thresholds, link);
-  if (link.status == io::LinkStatus::kOk && coarse->ambiguous) {
+  // A pose that a plan-view start also reached is judged as a plan-view pose when too few
+  // correspondences confirm it (sparse stations: the features are not where the evidence is).
+  bool plan_supported = best_from_plan;
+  for (std::size_t k = 0; k < hyps.size(); ++k)
+    plan_supported |= hyp_from_plan[k] && !Distinct(best.parent_from_child, hyps[k].parent_from_child, options.coarse);
+  if (!best_from_plan && (!plan_supported || link.consistent >= coarse->required_inliers)) {
+    Classify(options.thresholds, coarse->required_inliers, link);
+    if (link.status == io::LinkStatus::kOk && coarse->ambiguous) {
+      link.status = io::LinkStatus::kWeak;
+      link.reason = "features were ambiguous (" + coarse->reason + "); the surfaces decided";
+    }
+    return finish();
+  }
+  // A plan-view pose: the surfaces are the evidence, and the margin over the other poses tried.
+  if (!best_from_plan) link.method += " (plan-view confirmed)";
+  std::string reason;
+  if (!(reason = SurfaceFailure(options.thresholds, link)).empty()) {
+    link.status = io::LinkStatus::kFailed;
+    link.reason = "plan-view pose: " + reason;
+  } else if (!(reason = SurfaceWeakness(options.thresholds, link)).empty()) {
     link.status = io::LinkStatus::kWeak;
-    link.reason = "features were ambiguous (" + coarse->reason + "); the surfaces decided";
+    link.reason = "plan-view pose: " + reason;
+  } else if (rival && Score(*rival) >= 0.5 * Score(best)) {
+    link.status = io::LinkStatus::kWeak;
+    link.reason = Format("plan-view pose with a close second (score %.2f vs %.2f)", Score(*rival), Score(best));
+  } else {
+    link.status = io::LinkStatus::kOk;
+    link.reason.clear();
   }
   return finish();
 }

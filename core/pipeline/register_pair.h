@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,18 +14,24 @@
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
+#include "core/registration/geometric_features.h"
+#include "core/registration/icp.h"
+#include "core/registration/plan_view.h"
 
 namespace scanreg::pipeline {
 
 // A scan with what the registration derives from it once.
 struct PreparedScan {
   const Scan* scan = nullptr;
-  ScanFeatures features;
+  ScanFeatures features;        // SIFT (empty when not used)
+  GeometricFeatures geometric;  // FPFH (empty when not used)
+  PlanView plan;                // walls seen from above (levelled scans with geometric features)
   std::vector<std::uint8_t> confidence;  // W §2 step 5
   std::vector<Eigen::Vector3d> samples;  // valid points voxel-downsampled at the dense ICP voxel
+  std::shared_ptr<const IcpSurface> surface;  // the samples prepared as a dense ICP parent (fine = dense)
 };
 
-// Features are detected by the caller; this fills confidence and samples.
+// Features are detected by the caller; this fills confidence, samples and the plan view.
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared);
 
 struct PairResult {
@@ -34,9 +41,19 @@ struct PairResult {
   std::vector<int> coarse_inlier_matches;  // indices into `matches` of the coarse RANSAC inliers, ascending
 };
 
-// matches: parent's descriptors (query) matched in the child (train).
+// matches: parent's SIFT descriptors (query) matched in the child (train); geometric: FPFH matches
+// (MatchGeometric(parent.geometric, child.geometric)). Both feed one coarse estimator, levelled
+// (4-DoF) when both scans are (GeometricFeatures::levelled) and the coarse method is 3D.
 PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, const std::vector<FeatureMatch>& matches,
-                        const RegisterOptions& options, const CancelToken& cancel);
+                        const std::vector<GeometricMatch>& geometric, const RegisterOptions& options,
+                        const CancelToken& cancel);
+
+// Link weights beyond SIFT (issue 11): the support of the FPFH matches alone beyond chance (a short
+// RANSAC; 0 when it does not pass the chance test) and, for levelled scans, the plan-view
+// correlation of the best hypothesis above that of unrelated scans (at least 1: every levelled pair
+// stays a candidate link).
+int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const std::vector<GeometricMatch>& geometric,
+                    const RegisterOptions& options);
 
 // Overlap and RMS (point-to-plane) of the child's samples against the parent's, and free-space
 // conflicts, at a pose: the evidence shared by every method.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <set>
 
 #include "core/common/log.h"
@@ -29,6 +30,37 @@ int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
 }
 
 }  // namespace
+
+double GeometricVoxel(const std::vector<const Scan*>& scans, const RegisterOptions& options) {
+  if (!UsesGeometric(options.features) || options.geometric.voxel_m > 0.0 || scans.empty())
+    return options.geometric.voxel_m;
+  std::vector<double> voxels;
+  for (const Scan* s : scans) voxels.push_back(SuggestVoxel(*s));
+  std::nth_element(voxels.begin(), voxels.begin() + voxels.size() / 2, voxels.end());
+  const double voxel = voxels[voxels.size() / 2];
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "geometric features: voxel %.4g m (from the scans' spacing and extent)", voxel);
+  LogInfo(buf);
+  return voxel;
+}
+
+Status PrepareScanFeatures(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared, bool* cached,
+                           const CancelToken& cancel) {
+  if (UsesSift(options.features)) {
+    Expected<ScanFeatures> f = options.feature_cache_dir.empty()
+                                   ? DetectFeatures(scan, options.sift)
+                                   : LoadOrDetectFeatures(scan, options.sift, options.feature_cache_dir, cached);
+    if (!f) return MakeError(f.error().code, "scan '" + scan.name + "': " + f.error().message);
+    prepared->features = std::move(*f);
+  }
+  if (UsesGeometric(options.features)) {
+    Expected<GeometricFeatures> g = DetectGeometricFeatures(scan, options.geometric, cancel);
+    if (!g) return MakeError(g.error().code, "scan '" + scan.name + "': " + g.error().message);
+    prepared->geometric = std::move(*g);
+  }
+  PrepareScan(scan, options, prepared);
+  return Status::Ok();
+}
 
 // The matches of a pair in both directions (parent's features as query), without duplicates:
 // the ratio test is asymmetric, so the union holds more true correspondences than either side.
@@ -110,24 +142,23 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
   if (!choices) return choices.error();
 
-  // W §2 steps 1 and 5: features and confidence maps, once per scan.
+  // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
   std::vector<PreparedScan> prepared(n);
   auto t0 = std::chrono::steady_clock::now();
+  RegisterOptions prepare_options = options;
+  std::vector<const Scan*> all;
+  for (const Scan& s : scans) all.push_back(&s);
+  prepare_options.geometric.voxel_m = GeometricVoxel(all, options);
   for (int i = 0; i < n; ++i) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
     progress.Report(0.3 * i / n, "features of " + scans[i].name);
     bool cached = false;
-    Expected<ScanFeatures> f = options.feature_cache_dir.empty()
-                                   ? DetectFeatures(scans[i], options.sift)
-                                   : LoadOrDetectFeatures(scans[i], options.sift, options.feature_cache_dir, &cached);
-    if (!f) return MakeError(f.error().code, "scan '" + scans[i].name + "': " + f.error().message);
+    if (Status st = PrepareScanFeatures(scans[i], prepare_options, &prepared[i], &cached, cancel); !st) return st.error();
     result.features_from_cache += cached;
-    prepared[i].features = std::move(*f);
-    PrepareScan(scans[i], options, &prepared[i]);
   }
   result.seconds_features = Since(t0);
 
-  // W §2 steps 2-3: matching and the confusion matrix.
+  // W §2 steps 2-3: matching and the confusion matrix; FPFH matches of every pair (parent i < child j).
   t0 = std::chrono::steady_clock::now();
   std::vector<ScanFeatures> features;
   for (const PreparedScan& p : prepared) features.push_back(p.features);
@@ -135,12 +166,35 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   Expected<MatchTable> table = MatchAllPairs(features, options.match, match_progress, cancel);
   if (!table) return table.error();
   result.confusion = table->confusion;
+  std::map<std::pair<int, int>, std::vector<GeometricMatch>> geometric_matches;
+  Eigen::MatrixXi weights = result.confusion;
+  if (UsesGeometric(options.features)) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+        std::vector<GeometricMatch>& m = geometric_matches[{i, j}];
+        m = MatchGeometric(prepared[i].geometric, prepared[j].geometric);
+        const int w = GeometricWeight(prepared[i], prepared[j], m, options);
+        weights(i, j) += w;
+        weights(j, i) += w;
+      }
+  }
   result.seconds_matching = Since(t0);
+  const auto geometric_of = [&](int parent, int child) {
+    std::vector<GeometricMatch> out;
+    const auto it = geometric_matches.find({std::min(parent, child), std::max(parent, child)});
+    if (it == geometric_matches.end()) return out;
+    out = it->second;
+    if (parent > child)
+      for (GeometricMatch& g : out) std::swap(g.parent, g.child);
+    return out;
+  };
 
   LinkSource source;
-  source.weights = result.confusion;
+  source.weights = weights;
   source.register_pair = [&](int parent, int child) {
-    return RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child), options, cancel);
+    return RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child), geometric_of(parent, child),
+                        options, cancel);
   };
   source.min_check_weight = options.min_check_matches;
   source.no_link_reason = "no link to a registered scan: no overlapping scan with enough feature matches";

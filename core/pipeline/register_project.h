@@ -14,6 +14,7 @@
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
+#include "core/pipeline/register_pair.h"
 
 namespace scanreg::pipeline {
 
@@ -46,6 +47,15 @@ struct ProjectRegistration {
 
 // The matches of a pair in both directions (parent's features as query), without duplicates:
 // the ratio test is asymmetric, so the union holds more true correspondences than either side.
+// The voxel of the geometric features: options.geometric.voxel_m when set, else the median of
+// SuggestVoxel over the scans (logged).
+double GeometricVoxel(const std::vector<const Scan*>& scans, const RegisterOptions& options);
+
+// SIFT (or the feature cache) and FPFH as options.features asks (the geometric voxel resolved),
+// then PrepareScan. *cached: the SIFT features came from the cache.
+Status PrepareScanFeatures(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared, bool* cached,
+                           const CancelToken& cancel);
+
 std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child);
 
 // The user's scan-order choices by scan index: root, parent overrides, rejected links (dropped

@@ -32,6 +32,12 @@ std::vector<std::string> FineNames() {
   return names;
 }
 
+std::vector<std::string> FeatureNames() {
+  std::vector<std::string> names;
+  for (FeatureSources f : AllFeatureSources()) names.push_back(FeatureSourcesName(f));
+  return names;
+}
+
 Status Bad(const RegisterSetting& s, const std::string& value, const std::string& want) {
   return MakeError(ErrorCode::kInvalidArgument, std::string(s.label) + ": '" + value + "' is not valid; " + want);
 }
@@ -50,6 +56,7 @@ Status SetNumber(const RegisterSetting& s, const std::string& value, double lo, 
 const std::vector<RegisterSetting>& RegisterSettings() {
   static const std::vector<RegisterSetting> all = {
       {"register.coarse", "coarse", "coarse method", {"3d", "epnp", "none"}},
+      {"register.features", "features", "correspondences", FeatureNames()},
       {"register.fine", "fine", "fine method", FineNames()},
       {"register.ratio", "ratio", "descriptor ratio t_des", {}},
       {"register.noise_m", "noise", "range noise (m)", {}},
@@ -64,6 +71,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   const std::string key = s.key;
   if (key == "register.coarse") return o.from_current_poses ? "none" : CoarseMethodName(o.coarse.method);
   if (key == "register.fine") return FineMethodName(o.fine);
+  if (key == "register.features") return FeatureSourcesName(o.features);
   if (key == "register.ratio") return Number(o.match.ratio);
   if (key == "register.noise_m") return Number(o.range_sigma_m);
   if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
@@ -97,6 +105,15 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
     for (FineMethod m : AllFineMethods()) {
       if (value == FineMethodName(m)) {
         o->fine = m;
+        return Status::Ok();
+      }
+    }
+    return Bad(s, value, "choose " + Join(s.choices));
+  }
+  if (key == "register.features") {
+    for (FeatureSources f : AllFeatureSources()) {
+      if (value == FeatureSourcesName(f)) {
+        o->features = f;
         return Status::Ok();
       }
     }

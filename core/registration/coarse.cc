@@ -20,28 +20,63 @@ struct Score {
   bool BetterThan(const Score& o) const { return support > o.support || (support == o.support && cost < o.cost); }
 };
 
+double Tolerance(const Correspondence3d& x, double thr) { return x.tolerance_m > 0.0 ? x.tolerance_m : thr; }
+
 Score ScorePose(const std::vector<Correspondence3d>& c, const Eigen::Isometry3d& pose, double thr) {
   Score s;
   s.cost = 0.0;
-  const double t2 = thr * thr;
   for (const auto& x : c) {
+    const double t = Tolerance(x, thr);
     const double d2 = (x.parent - pose * x.child).squaredNorm();
-    if (d2 < t2) ++s.support;
-    s.cost += std::min(d2, t2);
+    if (d2 < t * t) ++s.support;
+    s.cost += std::min(d2, t * t) / (t * t);  // normalised: sources with other tolerances weigh alike
   }
   return s;
 }
 
 std::vector<int> Inliers(const std::vector<Correspondence3d>& c, const Eigen::Isometry3d& pose, double thr) {
   std::vector<int> out;
-  for (std::size_t i = 0; i < c.size(); ++i)
-    if ((c[i].parent - pose * c[i].child).squaredNorm() < thr * thr) out.push_back(static_cast<int>(i));
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const double t = Tolerance(c[i], thr);
+    if ((c[i].parent - pose * c[i].child).squaredNorm() < t * t) out.push_back(static_cast<int>(i));
+  }
   return out;
 }
 
 bool Distinct(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const CoarseOptions& o) {
   return (a.translation() - b.translation()).norm() > o.ambiguity_distance_m ||
          RotationAngle(a.linear().transpose() * b.linear()) > o.ambiguity_angle_rad;
+}
+
+// Heading about z and translation minimising the squared distances (levelled frames): the yaw
+// from the centred horizontal coordinates, the translation from the centroids.
+std::optional<Eigen::Isometry3d> FitHeading(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+                                            const std::vector<double>& weights = {}) {
+  const std::size_t n = src.size();
+  if (n < 2) return std::nullopt;
+  const auto w = [&](std::size_t i) { return weights.empty() ? 1.0 : weights[i]; };
+  Eigen::Vector3d cs = Eigen::Vector3d::Zero(), cd = Eigen::Vector3d::Zero();
+  double wsum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) cs += w(i) * src[i], cd += w(i) * dst[i], wsum += w(i);
+  if (!(wsum > 0.0)) return std::nullopt;
+  cs /= wsum;
+  cd /= wsum;
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = (src[i] - cs).head<2>(), b = (dst[i] - cd).head<2>();
+    cos_sum += w(i) * a.dot(b);
+    sin_sum += w(i) * (a.x() * b.y() - a.y() * b.x());
+  }
+  if (std::hypot(sin_sum, cos_sum) < 1e-12) return std::nullopt;  // horizontally coincident
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(std::atan2(sin_sum, cos_sum), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = cd - out.linear() * cs;
+  return out;
+}
+
+int SampleSize(const CoarseOptions& o) {
+  if (o.method == CoarseMethod::kEpnp) return o.sample_size_epnp;
+  return o.levelled ? 2 : 3;
 }
 
 // Hypotheses needed so that an all-inlier sample occurs with probability `confidence`.
@@ -69,7 +104,7 @@ PassResult RunPass(const std::vector<Correspondence3d>& c, const std::vector<int
                    std::mt19937_64& rng, const CancelToken& cancel, double target_fraction, Reject reject) {
   PassResult out;
   const bool epnp = o.method == CoarseMethod::kEpnp;
-  const int s = epnp ? o.sample_size_epnp : 3;
+  const int s = SampleSize(o);
   const int m = static_cast<int>(pool.size());
   if (m < s) return out;
   long needed = target_fraction >= 0.0 ? RequiredIterations(target_fraction, s, o.confidence, o.max_iterations)
@@ -107,8 +142,11 @@ PassResult RunPass(const std::vector<Correspondence3d>& c, const std::vector<int
         sp[k] = c[sample[k]].parent;
         sc[k] = c[sample[k]].child;
       }
-      auto fit = FitRigid(sc, sp);
-      if (fit.ok()) pose = *fit;
+      if (o.levelled) {
+        pose = FitHeading(sc, sp);
+      } else if (auto fit = FitRigid(sc, sp); fit.ok()) {
+        pose = *fit;
+      }
     }
     if (!pose || reject(*pose)) continue;
     const Score score = ScorePose(c, *pose, o.inlier_threshold_m);
@@ -125,23 +163,47 @@ PassResult RunPass(const std::vector<Correspondence3d>& c, const std::vector<int
   return out;
 }
 
-// FitRigid on the inliers, re-scored, while the support grows (local optimisation).
-void Refine(const std::vector<Correspondence3d>& c, double thr, Eigen::Isometry3d& pose, Score& score) {
-  for (int round = 0; round < 10; ++round) {
-    const std::vector<int> in = Inliers(c, pose, thr);
-    std::vector<Eigen::Vector3d> src, dst;
-    for (int i : in) {
-      src.push_back(c[i].child);
-      dst.push_back(c[i].parent);
+// A refit on the inliers, re-scored, repeated while the support grows (local optimisation):
+// heading + translation for levelled scans, then 6-DoF where that keeps the support.
+void Refine(const std::vector<Correspondence3d>& c, double thr, bool levelled, Eigen::Isometry3d& pose, Score& score) {
+  for (int pass = levelled ? 0 : 1; pass < 2; ++pass) {
+    for (int round = 0; round < 10; ++round) {
+      const std::vector<int> in = Inliers(c, pose, thr);
+      std::vector<Eigen::Vector3d> src, dst;
+      std::vector<double> weights;  // 1 / tolerance^2: the better localised sources count more
+      for (int i : in) {
+        src.push_back(c[i].child);
+        dst.push_back(c[i].parent);
+        weights.push_back(1.0 / (Tolerance(c[i], thr) * Tolerance(c[i], thr)));
+      }
+      std::optional<Eigen::Isometry3d> fit;
+      if (pass == 0) {
+        fit = FitHeading(src, dst, weights);
+      } else if (auto rigid = FitRigid(src, dst, weights); rigid.ok()) {
+        fit = *rigid;
+      }
+      if (!fit) break;
+      const Score s = ScorePose(c, *fit, thr);
+      if (s.support < score.support || (!s.BetterThan(score) && round > 0)) break;
+      pose = *fit;
+      score = s;
     }
-    auto fit = FitRigid(src, dst);
-    if (!fit.ok()) return;
-    const Score s = ScorePose(c, *fit, thr);
-    if (!s.BetterThan(score) && round > 0) return;
-    if (s.support < score.support) return;
-    pose = *fit;
-    score = s;
   }
+}
+
+// log of the binomial tail P[X >= k], X ~ Binomial(n, p).
+double LogBinomialTail(int n, int k, double p) {
+  if (k <= 0) return 0.0;
+  if (k > n) return -std::numeric_limits<double>::infinity();
+  double log_sum = -std::numeric_limits<double>::infinity();
+  for (int j = k; j <= n; ++j) {
+    const double t = std::lgamma(n + 1.0) - std::lgamma(j + 1.0) - std::lgamma(n - j + 1.0) + j * std::log(p) +
+                     (n - j) * std::log1p(-p);
+    const double hi = std::max(log_sum, t);
+    log_sum = hi + std::log(std::exp(log_sum - hi) + std::exp(t - hi));
+    if (t < log_sum - 40.0) break;  // the remaining terms shrink geometrically
+  }
+  return log_sum;
 }
 
 }  // namespace
@@ -152,13 +214,41 @@ Status CoarseOptions::Validate() const {
   if (max_iterations < 1) return bad("max_iterations must be >= 1");
   if (!(confidence > 0.0 && confidence < 1.0)) return bad("confidence must be in (0, 1)");
   if (!(inlier_threshold_m > 0.0) || !std::isfinite(inlier_threshold_m)) return bad("inlier_threshold_m must be > 0 metres");
-  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) return bad("min_inlier_ratio must be in [0, 1]");
-  if (min_inliers < 3) return bad("min_inliers must be >= 3");
+  if (!(max_false_pose_probability > 0.0 && max_false_pose_probability < 1.0))
+    return bad("max_false_pose_probability must be in (0, 1)");
+  if (levelled && method == CoarseMethod::kEpnp) return bad("the levelled (4-DoF) solver needs the 3D method");
   if (!(ambiguity_ratio > 0.0 && ambiguity_ratio <= 1.0)) return bad("ambiguity_ratio must be in (0, 1]");
   if (!(ambiguity_distance_m > 0.0)) return bad("ambiguity_distance_m must be > 0 metres");
   if (!(ambiguity_angle_rad > 0.0)) return bad("ambiguity_angle_rad must be > 0");
   if (!(focal > 0.0) || !std::isfinite(focal)) return bad("focal must be > 0 pixels");
   return Status::Ok();
+}
+
+int RequiredInliers(int n, int sample_size, long hypotheses, double inlier_threshold_m,
+                    const std::vector<Correspondence3d>& correspondences, double max_false_pose_probability) {
+  const int floor = sample_size + 2;
+  // The parent points' extent, robust to stray points: 5th to 95th percentile per axis.
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  if (!correspondences.empty()) {
+    for (int a = 0; a < 3; ++a) {
+      std::vector<double> v;
+      for (const Correspondence3d& x : correspondences)
+        if (x.parent.allFinite()) v.push_back(x.parent[a]);
+      if (v.empty()) continue;
+      std::sort(v.begin(), v.end());
+      size[a] = v[static_cast<std::size_t>(0.95 * (v.size() - 1))] - v[static_cast<std::size_t>(0.05 * (v.size() - 1))];
+    }
+  }
+  std::sort(size.data(), size.data() + 3);
+  double widest = inlier_threshold_m;  // the chance of a stray agreement grows with the tolerance
+  for (const Correspondence3d& x : correspondences) widest = std::max(widest, x.tolerance_m);
+  const double disc = M_PI * widest * widest;
+  const double area = std::max(size[2] * size[1], disc);
+  const double p = std::clamp(2.0 * disc / area, 1e-12, 0.5);
+  const double log_budget = std::log(max_false_pose_probability) - std::log(std::max(1L, hypotheses));
+  for (int k = floor; k <= n; ++k)
+    if (LogBinomialTail(n - sample_size, k - sample_size, p) <= log_budget) return k;
+  return n + 1;  // no support would be convincing
 }
 
 Expected<CoarseResult> EstimateCoarse(const std::vector<Correspondence3d>& correspondences,
@@ -167,8 +257,8 @@ Expected<CoarseResult> EstimateCoarse(const std::vector<Correspondence3d>& corre
   const auto& c = correspondences;
   const int n = static_cast<int>(c.size());
   const bool epnp = options.method == CoarseMethod::kEpnp;
-  const int s = epnp ? options.sample_size_epnp : 3;
-  const int needed = std::max(s, options.min_inliers);
+  const int s = SampleSize(options);
+  const int needed = s + 2;
   if (n < needed)
     return MakeError(ErrorCode::kFailed, "coarse registration needs at least " + std::to_string(needed) +
                                              " correspondences, got " + std::to_string(n));
@@ -187,14 +277,16 @@ Expected<CoarseResult> EstimateCoarse(const std::vector<Correspondence3d>& corre
   if (!best.pose)
     return MakeError(ErrorCode::kFailed, "coarse registration found no pose from " + std::to_string(n) +
                                              " correspondences (" + std::to_string(pool.size()) + " usable for sampling)");
-  Refine(c, options.inlier_threshold_m, *best.pose, best.score);
+  Refine(c, options.inlier_threshold_m, options.levelled, *best.pose, best.score);
   out.parent_from_child = *best.pose;
   out.inlier_indices = Inliers(c, out.parent_from_child, options.inlier_threshold_m);
   out.inliers = static_cast<int>(out.inlier_indices.size());
   double sum2 = 0.0;
   for (int i : out.inlier_indices) sum2 += (c[i].parent - out.parent_from_child * c[i].child).squaredNorm();
   out.rms_m = out.inliers ? std::sqrt(sum2 / out.inliers) : 0.0;
-  const int min_count = std::max(options.min_inliers, static_cast<int>(std::ceil(options.min_inlier_ratio * n)));
+  const int min_count = RequiredInliers(n, s, out.iterations, options.inlier_threshold_m, c,
+                                        options.max_false_pose_probability);
+  out.required_inliers = min_count;
   if (out.inliers < min_count)
     return MakeError(ErrorCode::kFailed, "coarse registration: only " + std::to_string(out.inliers) + " of " +
                                              std::to_string(n) + " correspondences agree on a pose (need " +

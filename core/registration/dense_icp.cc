@@ -15,14 +15,6 @@
 namespace scanreg {
 namespace {
 
-std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(scan.size());
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i]) out.push_back(scan.points[i].cast<double>());
-  return out;
-}
-
 // PCA normals over k nearest samples; zero vector where the neighbourhood is not planar.
 std::vector<Eigen::Vector3d> Normals(const std::vector<Eigen::Vector3d>& pts, const PointIndex& index, int k,
                                      double max_variation) {
@@ -97,11 +89,27 @@ Expected<IcpResult> DenseIcpSamples(const std::vector<Eigen::Vector3d>& parent_s
   if (Status s = options.Validate(); !s) return s.error();
   if (parent_samples.empty() || child_samples.empty())
     return MakeError(ErrorCode::kInvalidArgument, "dense ICP: a scan has no valid points");
-  const std::vector<Eigen::Vector3d>& target = parent_samples;
+  return DenseIcpSurface(IcpSurface(parent_samples, options), child_samples, initial_parent_from_child, options,
+                         progress, cancel);
+}
+
+IcpSurface::IcpSurface(std::vector<Eigen::Vector3d> samples, const DenseIcpOptions& options)
+    : points(std::move(samples)), index(std::make_unique<PointIndex>(points)) {
+  normals = Normals(points, *index, options.normal_neighbours, options.max_surface_variation);
+}
+
+IcpSurface::~IcpSurface() = default;
+
+Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<Eigen::Vector3d>& child_samples,
+                                    Eigen::Isometry3d initial_parent_from_child, const DenseIcpOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  if (parent.points.empty() || child_samples.empty())
+    return MakeError(ErrorCode::kInvalidArgument, "dense ICP: a scan has no valid points");
+  const std::vector<Eigen::Vector3d>& target = parent.points;
   const std::vector<Eigen::Vector3d> source = ThinEvenly(child_samples, options.max_samples);
-  const PointIndex index(target);
-  const std::vector<Eigen::Vector3d> normals =
-      Normals(target, index, options.normal_neighbours, options.max_surface_variation);
+  const PointIndex& index = *parent.index;
+  const std::vector<Eigen::Vector3d>& normals = parent.normals;
 
   IcpResult out;
   out.parent_from_child = initial_parent_from_child;
@@ -137,7 +145,12 @@ Expected<IcpResult> DenseIcpSamples(const std::vector<Eigen::Vector3d>& parent_s
         if (p.target >= 0) residuals.push_back(p.residual);
       out.correspondences = static_cast<int>(residuals.size());
       if (out.correspondences < options.min_correspondences) break;
-      const double scale = std::max(1.4826 * MedianAbs(residuals), options.robust_scale_floor_m);
+      // Coarse stages keep residuals up to about half their reach (floor: a tenth of it): a start
+      // a few decimetres off along a street is corrected only by the few surfaces across it, whose
+      // residuals the noise-sized scale would reject (issue 11, plan-view starts).
+      const double floor =
+          stage + 1 < stages ? std::max(options.robust_scale_floor_m, 0.1 * max_d) : options.robust_scale_floor_m;
+      const double scale = std::max(1.4826 * MedianAbs(residuals), floor);
       const double c = 4.685 * scale;  // Tukey biweight
       // Gauss-Newton normal equations, x = [omega; v], left perturbation T <- exp(x) T:
       // r = n . (q - s), dr/domega = (q x n)^T, dr/dv = n^T.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -10,6 +11,8 @@
 #include "core/geometry/scan.h"
 
 namespace scanreg {
+
+class PointIndex;
 
 struct IcpResult {
   Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
@@ -70,6 +73,20 @@ struct DenseIcpOptions {
 // converged = false and overlap ~ 0, and callers mark the link failed.
 Expected<IcpResult> DenseIcp(const Scan& parent, const Scan& child, Eigen::Isometry3d initial_parent_from_child,
                              const DenseIcpOptions& options, ProgressSink& progress, const CancelToken& cancel);
+
+// A parent's voxel samples prepared for dense ICP once (k-d tree and PCA normals), for every pair
+// and every start pose it takes part in.
+struct IcpSurface {
+  IcpSurface(std::vector<Eigen::Vector3d> samples, const DenseIcpOptions& options);
+  ~IcpSurface();
+  std::vector<Eigen::Vector3d> points;
+  std::unique_ptr<PointIndex> index;
+  std::vector<Eigen::Vector3d> normals;  // zero where the neighbourhood is not planar
+};
+
+Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<Eigen::Vector3d>& child_samples,
+                                    Eigen::Isometry3d initial_parent_from_child, const DenseIcpOptions& options,
+                                    ProgressSink& progress, const CancelToken& cancel);
 
 // The same on samples already voxel-downsampled at options.voxel_m (each scan's samples computed
 // once and reused for every pair it takes part in).

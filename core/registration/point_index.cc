@@ -1,5 +1,7 @@
 #include "core/registration/point_index.h"
 
+#include <cmath>
+
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -33,7 +35,13 @@ int PointIndex::Nearest(const Eigen::Vector3d& query, double max_distance_m, dou
   if (!q.allFinite()) return -1;
   pcl::Indices idx(1);
   std::vector<float> dist(1);
-  if (impl_->tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, idx, dist) < 1) return -1;
+  // A radius-bounded search (FLANN's k-nearest within a radius): an unbounded nearest search from
+  // far outside the cloud visits most of the tree (ICP from a wrong start pose took seconds).
+  if (!std::isfinite(max_distance_m)) {
+    if (impl_->tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, idx, dist) < 1) return -1;
+  } else if (impl_->tree.radiusSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), max_distance_m, idx, dist, 1) < 1) {
+    return -1;
+  }
   if (dist[0] > max_distance_m * max_distance_m) return -1;
   if (d2) *d2 = dist[0];
   return idx[0];

@@ -23,6 +23,14 @@ struct VoxelKeyHash {
 
 }  // namespace
 
+std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan) {
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(scan.CountValid());
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i]) pts.push_back(scan.points[i].cast<double>());
+  return pts;
+}
+
 std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points, double voxel_m) {
   std::vector<Eigen::Vector3d> out;
   if (!(voxel_m > 0.0)) {

@@ -4,7 +4,12 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/geometry/scan.h"
+
 namespace scanreg {
+
+// The scan's valid points in double precision, scanner frame, in cell order.
+std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan);
 
 // Centroids of the points in each occupied voxel (cubes aligned to the frame's origin), in the order
 // in which the voxels are first hit. voxel_m <= 0 returns the finite input points unchanged.

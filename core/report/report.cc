@@ -139,7 +139,8 @@ std::string NetworkSection(const io::Project& p, const std::filesystem::path& di
 std::string LinksSection(const io::Project& p) {
   std::string html = "<h2 id=\"links\">Links</h2>\n";
   HtmlTable t("links-table",
-              {"parent", "child", "kind", "method", "matches", "reliable", "RANSAC inliers", "consistent", "RMS (mm)",
+              {"parent", "child", "kind", "method", "SIFT matches", "FPFH matches", "reliable", "RANSAC inliers",
+               "of which FPFH", "consistent", "RMS (mm)",
                "overlap %", "conflict %", "iterations", "time (s)", "status", "reason"});
   for (const io::LinkRecord& l : p.links) {
     const std::string kind = l.loop_check ? "loop check" : io::IsTreeLink(l) ? "tree" : "attempt";
@@ -148,7 +149,8 @@ std::string LinksSection(const io::Project& p) {
     if (l.user_rejected) status += " (rejected by user)";
     t.AddRow(
         {Escape(l.parent), Escape(l.child), kind, Escape(l.method), std::to_string(l.matches),
-         std::to_string(l.reliable), std::to_string(l.ransac_inliers), std::to_string(l.consistent),
+         std::to_string(l.geometric_matches), std::to_string(l.reliable), std::to_string(l.ransac_inliers),
+         std::to_string(l.geometric_inliers), std::to_string(l.consistent),
          Fixed(l.rms_m * 1000, 1), Fixed(l.overlap * 100, 1), Fixed(l.conflict * 100, 1), std::to_string(l.iterations),
          Fixed(l.seconds, 2), "<span class=\"status\">" + Escape(status) + "</span>", Escape(l.reason)},
         l.loop_check ? "check" : io::LinkStatusName(l.status));

@@ -148,6 +148,7 @@ Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_f
       rho += sigma * sim::GaussianFromHash(sim::Hash(seed, i, kRangeNoise));
       refl += refl_sigma * sim::GaussianFromHash(sim::Hash(seed, i, kReflNoise));
       const Eigen::Vector3d los(cos_el[r] * cos_az[c], cos_el[r] * sin_az[c], sin_el[r]);
+      if (!options.reflectance) refl = 0.5;
       scan.Set(r, c, (rho * los).cast<float>(), static_cast<float>(std::clamp(refl, 0.0, 1.0)));
     }
   }

@@ -26,6 +26,7 @@ struct ScannerOptions {
   double max_range_m = 200.0;        // metres; farther surfaces (and the sky) give no return
   double range_noise_m = 0.012;      // sigma of Gaussian range noise along the line of sight, metres
   double reflectance_noise = 0.02;   // sigma of additive Gaussian reflectance noise, reflectance units
+  bool reflectance = true;           // false: every return has reflectance 0.5 (no usable intensity)
   double falloff_range_m = 60.0;     // metres at which the returned intensity has halved (1 / (1 + r / this))
   double min_return_signal = 0.002;  // albedo x cos(incidence) x fall-off below this is lost (no return)
   bool mixed_pixels = true;          // blend ranges across depth edges, as real beams with a footprint do

@@ -43,5 +43,6 @@ void RunMergeBench(Table& table, bool quick);
 void RunExportBench(Table& table, bool quick);
 void RunEmBench(Table& table, bool quick);
 void RunGlobalBench(Table& table, bool quick);
+void RunGeometricBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench

@@ -101,12 +101,14 @@ TEST_P(CoarseMethods, TooFewCorrespondencesOrInliersFail) {
   CoarseOptions o;
   o.method = GetParam();
   CancelToken cancel;
-  auto few = EstimateCoarse(Synthetic(truth, 6, 0.0, 0.0, -kPi, kPi, 3), o, cancel);
+  // One more correspondence than a sample is never enough (the sample size + 2 floor).
+  const int sample = GetParam() == CoarseMethod::kEpnp ? o.sample_size_epnp : 3;
+  auto few = EstimateCoarse(Synthetic(truth, sample + 1, 0.0, 0.0, -kPi, kPi, 3), o, cancel);
   ASSERT_FALSE(few.ok());
   EXPECT_EQ(few.error().code, ErrorCode::kFailed);
-  EXPECT_NE(few.error().message.find("got 6"), std::string::npos) << few.error().message;
-  // 100 pairs, only 6 consistent: below min_inliers (8) and min_inlier_ratio (10%).
-  auto weak = EstimateCoarse(Synthetic(truth, 100, 0.94, 0.0, -kPi, kPi, 4), o, cancel);
+  EXPECT_NE(few.error().message.find("got " + std::to_string(sample + 1)), std::string::npos) << few.error().message;
+  // 100 pairs, only 3 consistent: a wrong pose gathers that much by chance.
+  auto weak = EstimateCoarse(Synthetic(truth, 100, 0.97, 0.0, -kPi, kPi, 4), o, cancel);
   ASSERT_FALSE(weak.ok());
   EXPECT_EQ(weak.error().code, ErrorCode::kFailed);
   EXPECT_NE(weak.error().message.find("of 100"), std::string::npos) << weak.error().message;
@@ -114,6 +116,37 @@ TEST_P(CoarseMethods, TooFewCorrespondencesOrInliersFail) {
 
 INSTANTIATE_TEST_SUITE_P(Both, CoarseMethods, ::testing::Values(CoarseMethod::kEpnp, CoarseMethod::k3d),
                          [](const auto& info) { return info.param == CoarseMethod::kEpnp ? "Epnp" : "ThreeD"; });
+
+// Issue 11, item 3: a levelled pair (heading + translation) from 2-point samples survives 95 %
+// outliers, where the 3-point 6-DoF solver's budget does not reach an all-inlier sample reliably.
+TEST(Coarse, LevelledSolverFindsTheHeadingAmongNinetyFivePercentOutliers) {
+  const Eigen::Isometry3d truth = Pose(2.1, 0.0, 0.0, {9.5, -3.0, 0.4});
+  const auto c = Synthetic(truth, 400, 0.95, 0.01, -kPi, kPi, 21);
+  CoarseOptions o;
+  o.levelled = true;
+  CancelToken cancel;
+  auto r = EstimateCoarse(c, o, cancel);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_GE(r->inliers, 18);
+  ExpectClose(r->parent_from_child, truth, 0.05, 0.2);
+  o.method = CoarseMethod::kEpnp;
+  EXPECT_FALSE(o.Validate().ok()) << "the 4-DoF solver is a 3D-3D method";
+}
+
+// The support a pose needs follows the chance that a wrong pose reaches it: more correspondences
+// or a wider threshold need more, a larger scene less; never below the sample size + 2.
+TEST(Coarse, RequiredInliersFollowTheChanceOfAWrongPose) {
+  const Eigen::Isometry3d truth = Pose(0.3, 0.0, 0.0, {1.0, 2.0, 0.0});
+  const auto street = Synthetic(truth, 2000, 0.9, 0.0, -kPi, kPi, 5);  // parent points ~60 m across
+  std::vector<Correspondence3d> small = street;
+  for (Correspondence3d& x : small) x.parent *= 0.05;  // the same, 3 m across
+  const int base = RequiredInliers(100, 3, 10000, 0.1, street, 1e-3);
+  EXPECT_GE(base, 5);
+  EXPECT_GT(RequiredInliers(2000, 3, 10000, 0.1, street, 1e-3), base);
+  EXPECT_GT(RequiredInliers(100, 3, 10000, 0.5, street, 1e-3), base);
+  EXPECT_GT(RequiredInliers(100, 3, 10000, 0.1, small, 1e-3), base);
+  EXPECT_EQ(RequiredInliers(10, 2, 10, 1e-4, street, 1e-3), 4);
+}
 
 TEST(Coarse, EpnpWithPointsInFrontOnly) {
   const Eigen::Isometry3d truth = Pose(-1.2, -0.01, 0.015, {-3.0, 5.0, -0.2});

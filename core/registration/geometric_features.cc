@@ -1,0 +1,207 @@
+#include "core/registration/geometric_features.h"
+
+#include <pcl/features/fpfh_omp.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "core/registration/point_index.h"
+#include "core/registration/voxel_filter.h"
+
+namespace scanreg {
+
+struct GeometricFeatures::DescriptorIndex {
+  pcl::KdTreeFLANN<pcl::FPFHSignature33> tree;
+};
+
+namespace {
+
+constexpr double kMaxLevelTiltRad = 3.0 * M_PI / 180.0;
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Up from the normals: the direction most perpendicular to the walls (normals within 15° of
+// horizontal) and most parallel to the ground (within 15° of vertical), refined from z.
+void EstimateUp(const std::vector<Eigen::Vector3d>& normals, GeometricFeatures* f) {
+  const double c15 = std::cos(15.0 * M_PI / 180.0), s15 = std::sin(15.0 * M_PI / 180.0);
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  long ground = 0, walls = 0;
+  for (int round = 0; round < 4; ++round) {
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    ground = walls = 0;
+    for (const Eigen::Vector3d& n : normals) {
+      const double d = std::abs(n.dot(up));
+      if (d > c15) {
+        m -= n * n.transpose();
+        ++ground;
+      } else if (d < s15) {
+        m += n * n.transpose();
+        ++walls;
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m);
+    Eigen::Vector3d u = eig.eigenvectors().col(0);  // smallest eigenvalue
+    if (u.z() < 0) u = -u;
+    up = u.normalized();
+  }
+  f->up = up;
+  f->tilt_rad = std::acos(std::clamp(up.z(), -1.0, 1.0));
+  const double total = std::max<double>(1.0, normals.size());
+  f->levelled = f->tilt_rad < kMaxLevelTiltRad && ground >= 0.05 * total && walls >= 0.05 * total &&
+                (ground + walls) >= 0.3 * total;
+}
+
+}  // namespace
+
+Eigen::Isometry3d GeometricFeatures::Levelling() const {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  if (levelled) out.linear() = Eigen::Quaterniond::FromTwoVectors(up, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return out;
+}
+
+Status GeometricOptions::Validate() const {
+  auto bad = [](const std::string& m) { return Status(MakeError(ErrorCode::kInvalidArgument, "geometric features: " + m)); };
+  if (!(voxel_m >= 0.0) || !std::isfinite(voxel_m)) return bad("the voxel must be >= 0 metres (0: from the data)");
+  if (max_samples < 100) return bad("max_samples must be >= 100");
+  if (max_keypoints < 10) return bad("max_keypoints must be >= 10");
+  if (!(distinctive_fraction > 0.0 && distinctive_fraction <= 1.0)) return bad("distinctive_fraction must be in (0, 1]");
+  if (!(normal_radius_voxels >= 1.0) || !(feature_radius_voxels > normal_radius_voxels))
+    return bad("need 1 <= normal_radius_voxels < feature_radius_voxels");
+  return Status::Ok();
+}
+
+double SuggestVoxel(const Scan& scan) {
+  std::vector<Eigen::Vector3d> pts = ThinEvenly(ValidPoints(scan), 20000);
+  if (pts.size() < 10) return 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) c += p;
+  c /= double(pts.size());
+  std::vector<double> spread;
+  for (const auto& p : pts) spread.push_back((p - c).norm());
+  const double extent = Median(spread);
+  // Spacing of the full scan: nearest-neighbour distances among the thinned points shrink by the
+  // square root of the thinning on a surface.
+  const PointIndex index(pts);
+  std::vector<double> nn;
+  for (std::size_t i = 0; i < pts.size(); i += 10) {
+    const std::vector<int> k = index.KNearest(pts[i], 2);
+    if (k.size() == 2) nn.push_back((pts[k[1]] - pts[i]).norm());
+  }
+  const double thinning = double(scan.CountValid()) / double(pts.size());
+  const double spacing = Median(nn) / std::sqrt(std::max(1.0, thinning));
+  return std::max(3.0 * spacing, extent / 60.0);
+}
+
+Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
+                                                    const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  if (!(options.voxel_m > 0.0)) return MakeError(ErrorCode::kInvalidArgument, "geometric features: no voxel size");
+  GeometricFeatures f;
+  f.voxel_m = options.voxel_m;
+  std::vector<Eigen::Vector3d> samples = ThinEvenly(VoxelDownsample(ValidPoints(scan), options.voxel_m), options.max_samples);
+  if (samples.size() < 20) return f;  // nothing to describe: no geometric matches
+  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+  // Float coordinates relative to the centroid (clouds far from the origin keep their precision).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (const auto& p : samples) origin += p;
+  origin /= double(samples.size());
+  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  cloud->resize(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Eigen::Vector3f q = (samples[i] - origin).cast<float>();
+    (*cloud)[i] = pcl::PointXYZ(q.x(), q.y(), q.z());
+  }
+  auto tree = pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  auto normals = pcl::make_shared<pcl::PointCloud<pcl::Normal>>();
+  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
+  ne.setInputCloud(cloud);
+  ne.setSearchMethod(tree);
+  ne.setRadiusSearch(options.normal_radius_voxels * options.voxel_m);
+  // Normals face the scanner (the scan frame's origin), as PCL's viewpoint convention.
+  const Eigen::Vector3f viewpoint = (-origin).cast<float>();
+  ne.setViewPoint(viewpoint.x(), viewpoint.y(), viewpoint.z());
+  ne.compute(*normals);
+  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+
+  pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe;
+  fe.setInputCloud(cloud);
+  fe.setInputNormals(normals);
+  fe.setSearchMethod(tree);
+  fe.setRadiusSearch(options.feature_radius_voxels * options.voxel_m);
+  pcl::PointCloud<pcl::FPFHSignature33> fpfh;
+  fe.compute(fpfh);
+  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+
+  std::vector<Eigen::Vector3d> good_normals;
+  std::vector<float> curvature;
+  auto kept = pcl::make_shared<pcl::PointCloud<pcl::FPFHSignature33>>();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const pcl::Normal& n = (*normals)[i];
+    const float* h = fpfh[i].histogram;
+    if (!std::isfinite(n.normal_x) || !std::all_of(h, h + 33, [](float v) { return std::isfinite(v); })) continue;
+    float sum = 0.f;
+    for (int k = 0; k < 33; ++k) sum += h[k];
+    if (!(sum > 0.f)) continue;  // too few neighbours
+    f.points.push_back(samples[i]);
+    Fpfh d;
+    std::copy(h, h + 33, d.begin());
+    f.descriptors.push_back(d);
+    kept->push_back(fpfh[i]);
+    good_normals.emplace_back(n.normal_x, n.normal_y, n.normal_z);
+    f.normals.push_back(good_normals.back());
+    curvature.push_back(n.curvature);
+  }
+  if (f.points.size() < 20) {
+    f.points.clear();
+    f.normals.clear();
+    f.descriptors.clear();
+    return f;
+  }
+  EstimateUp(good_normals, &f);
+  // Keypoints: the most curved fraction, in sample order, thinned evenly.
+  std::vector<float> sorted = curvature;
+  const std::size_t cut = static_cast<std::size_t>((1.0 - options.distinctive_fraction) * (sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
+  std::vector<int> distinctive;
+  for (std::size_t i = 0; i < curvature.size(); ++i)
+    if (options.distinctive_fraction >= 1.0 || curvature[i] >= sorted[cut]) distinctive.push_back(static_cast<int>(i));
+  const int m = static_cast<int>(distinctive.size());
+  const int k = std::min(m, options.max_keypoints);
+  for (int i = 0; i < k; ++i) f.keypoints.push_back(distinctive[static_cast<std::size_t>(i * double(m) / k)]);
+  auto index = std::make_shared<GeometricFeatures::DescriptorIndex>();
+  index->tree.setInputCloud(kept);
+  f.index = index;
+  return f;
+}
+
+std::vector<GeometricMatch> MatchGeometric(const GeometricFeatures& parent, const GeometricFeatures& child,
+                                           double ratio) {
+  std::vector<GeometricMatch> out;
+  if (!parent.index || !child.index) return out;
+  const double near2 = 4.0 * child.voxel_m * child.voxel_m;
+  pcl::Indices idx(2), back(1);
+  std::vector<float> d2(2), back_d2(1);
+  for (int k : child.keypoints) {
+    pcl::FPFHSignature33 q;
+    std::copy(child.descriptors[k].begin(), child.descriptors[k].end(), q.histogram);
+    if (parent.index->tree.nearestKSearch(q, 2, idx, d2) < 2) continue;
+    if (!(d2[0] <= ratio * ratio * d2[1])) continue;
+    pcl::FPFHSignature33 p;
+    std::copy(parent.descriptors[idx[0]].begin(), parent.descriptors[idx[0]].end(), p.histogram);
+    if (child.index->tree.nearestKSearch(p, 1, back, back_d2) < 1) continue;
+    if ((child.points[back[0]] - child.points[k]).squaredNorm() > near2) continue;
+    out.push_back({static_cast<int>(idx[0]), k});
+  }
+  return out;
+}
+
+}  // namespace scanreg

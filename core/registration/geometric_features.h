@@ -1,0 +1,71 @@
+// Geometric correspondences beside SIFT (issue 11, item 2): FPFH descriptors (Rusu et al. 2009,
+// PCL's FPFHEstimationOMP) on voxel samples with normals, for scans with or without reflectance,
+// organized or not, and the scan's "up" direction estimated from its normals (ground and walls), so
+// that levelled scans can be registered with the 4-DoF solver (coarse.h).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
+
+namespace scanreg {
+
+struct GeometricOptions {
+  // Sample spacing, metres; both scans of a pair must use the same. 0: derived from the data
+  // (SuggestVoxel; the caller resolves it before DetectGeometricFeatures).
+  double voxel_m = 0.0;
+  int max_samples = 30000;   // samples kept for normals and descriptors (thinned evenly beyond)
+  int max_keypoints = 3000;  // samples of the child that look for a partner (thinned evenly)
+  // Keypoints are the most curved samples, this fraction of them: planes (ground, façades) give
+  // every sample the same descriptor and only add false matches.
+  double distinctive_fraction = 0.5;
+  double normal_radius_voxels = 2.5;
+  double feature_radius_voxels = 10.0;  // measured: scanreg-bench --section geometric
+  Status Validate() const;
+};
+
+using Fpfh = std::array<float, 33>;
+
+struct GeometricFeatures {
+  double voxel_m = 0.0;
+  std::vector<Eigen::Vector3d> points;  // voxel samples with a descriptor, scanner frame
+  std::vector<Eigen::Vector3d> normals;  // unit, facing the scanner, one per point
+  std::vector<Fpfh> descriptors;        // one per point
+  std::vector<int> keypoints;           // indices into points: the evenly thinned subset used as queries
+  // Levelling (issue 11, item 3): the scanner-frame direction of world up estimated from the normals
+  // of the ground (near vertical) and the walls (near horizontal); `levelled` when the scan holds
+  // enough of both and the estimate is within max tilt of the scanner's z axis.
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  bool levelled = false;
+  double tilt_rad = 0.0;  // angle between `up` and the scanner's z axis
+  // The rotation that takes `up` to +z (identity when not levelled): levelled frame from scan frame.
+  Eigen::Isometry3d Levelling() const;
+  // Nearest-descriptor search over `descriptors` (PCL's FLANN k-d tree), built once per scan.
+  struct DescriptorIndex;
+  std::shared_ptr<const DescriptorIndex> index;
+};
+
+// A voxel size for a scan: a few times its point spacing and a fraction of its extent (a 20 cm
+// object gets millimetres, a street tens of centimetres).
+double SuggestVoxel(const Scan& scan);
+
+Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
+                                                    const CancelToken& cancel);
+
+struct GeometricMatch {
+  int parent = 0;  // index into parent.points
+  int child = 0;   // index into child.points
+};
+
+// Each child keypoint's nearest parent descriptor, kept when the parent point's nearest child
+// descriptor lies within two voxels of the keypoint (a mutual match up to the sampling) and it
+// passes the ratio test against the second nearest parent descriptor.
+std::vector<GeometricMatch> MatchGeometric(const GeometricFeatures& parent, const GeometricFeatures& child,
+                                           double ratio = 0.9);
+
+}  // namespace scanreg

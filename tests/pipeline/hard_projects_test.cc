@@ -1,0 +1,148 @@
+// Issue 11: projects outside the paper's conditions, with known poses. Sparse stations (10 and 15
+// m), low resolution (600x150) and no usable reflectance must register every scan within 2 cm /
+// 0.1° with default options, and no accepted link may be wrong; SIFT alone (the paper's method)
+// must fail where the geometric sources do the work, or the test would prove nothing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/geometry/transform.h"
+#include "core/pipeline/register_project.h"
+#include "core/registration/plan_view.h"
+#include "core/simulate/project_sim.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+
+struct Hard {
+  int stations, cols, rows;
+  double spacing;
+  bool reflectance;
+  std::uint64_t seed;
+};
+
+std::vector<Scan> Simulate(const Hard& h) {
+  SimulatedProjectOptions o;
+  o.stations = h.stations;
+  o.spacing_m = h.spacing;
+  o.scanner.cols = h.cols;
+  o.scanner.rows = h.rows;
+  o.scanner.reflectance = h.reflectance;
+  o.seed = o.scanner.seed = o.scene.seed = h.seed;
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> scans = SimulateProject(o, progress, cancel);
+  EXPECT_TRUE(scans.ok()) << scans.error().ToString();
+  return scans.ok() ? std::move(*scans) : std::vector<Scan>{};
+}
+
+ProjectRegistration Register(const std::vector<Scan>& scans, const RegisterOptions& options) {
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<ProjectRegistration> r = RegisterScans(scans, std::vector<std::optional<std::string>>(scans.size()), {},
+                                                  options, progress, cancel);
+  EXPECT_TRUE(r.ok()) << r.error().ToString();
+  return r.ok() ? *r : ProjectRegistration{};
+}
+
+int CountRegistered(const ProjectRegistration& r) {
+  int n = 0;
+  for (const ScanRegistration& s : r.scans) n += s.registered;
+  return n;
+}
+
+// Every scan within 2 cm / 0.1°, and every accepted (ok or weak) link within 5 cm / 0.2° of the truth.
+void ExpectAllRegisteredAndNoWrongLink(const std::vector<Scan>& scans, const ProjectRegistration& r) {
+  ASSERT_EQ(r.scans.size(), scans.size());
+  const std::vector<ReferenceError> errors = ReferenceErrors(r, scans);
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    EXPECT_TRUE(r.scans[i].registered) << scans[i].name << ": " << r.scans[i].reason;
+    if (!r.scans[i].registered) continue;
+    EXPECT_LE(errors[i].position_m, 0.02) << scans[i].name;
+    EXPECT_LE(errors[i].angle_rad * kDeg, 0.1) << scans[i].name;
+  }
+  int accepted = 0;
+  for (const io::LinkRecord& l : r.links) {
+    if (l.status == io::LinkStatus::kFailed) continue;
+    ++accepted;
+    const Scan* p = nullptr;
+    const Scan* c = nullptr;
+    for (const Scan& s : scans) {
+      if (s.name == l.parent) p = &s;
+      if (s.name == l.child) c = &s;
+    }
+    const PoseError e =
+        ComparePoses(l.parent_from_child, p->reference_world_from_scan->inverse() * *c->reference_world_from_scan);
+    EXPECT_LE(e.position_m, 0.05) << l.parent << "-" << l.child << " accepted but wrong (" << l.method << ")";
+    EXPECT_LE(e.angle_rad * kDeg, 0.2) << l.parent << "-" << l.child;
+  }
+  EXPECT_GE(accepted, static_cast<int>(scans.size()) - 1);
+}
+
+TEST(HardProjects, StationsTenMetresApart) {
+  const std::vector<Scan> scans = Simulate({5, 1000, 250, 10.0, true, 3});
+  const ProjectRegistration r = Register(scans, RegisterOptions{});
+  ExpectAllRegisteredAndNoWrongLink(scans, r);
+  // The paper's SIFT-only pipeline does not manage it (the reason this issue exists).
+  RegisterOptions sift_only;
+  sift_only.features = FeatureSources::kSift;
+  EXPECT_LT(CountRegistered(Register(scans, sift_only)), static_cast<int>(scans.size()));
+}
+
+TEST(HardProjects, StationsFifteenMetresApart) {
+  const std::vector<Scan> scans = Simulate({4, 1500, 375, 15.0, true, 4});
+  ExpectAllRegisteredAndNoWrongLink(scans, Register(scans, RegisterOptions{}));
+}
+
+TEST(HardProjects, LowResolutionScans) {
+  const std::vector<Scan> scans = Simulate({4, 600, 150, 5.0, true, 5});
+  ExpectAllRegisteredAndNoWrongLink(scans, Register(scans, RegisterOptions{}));
+}
+
+TEST(HardProjects, ScansWithoutReflectance) {
+  const std::vector<Scan> scans = Simulate({4, 1000, 250, 5.0, false, 6});
+  ASSERT_FALSE(scans.empty());
+  for (std::size_t i = 0; i < scans[0].size(); ++i)
+    if (scans[0].valid[i]) ASSERT_EQ(scans[0].reflectance[i], 0.5f);
+  const ProjectRegistration r = Register(scans, RegisterOptions{});
+  ExpectAllRegisteredAndNoWrongLink(scans, r);
+  for (const io::LinkRecord& l : r.links) EXPECT_EQ(l.ransac_inliers, l.geometric_inliers) << "no SIFT without reflectance";
+  RegisterOptions sift_only;
+  sift_only.features = FeatureSources::kSift;
+  EXPECT_LE(CountRegistered(Register(scans, sift_only)), 1);
+}
+
+// The plan-view search alone (no correspondence): two levelled scans 15 m apart, the best
+// hypothesis within the fine step's reach of the truth (0.5 m, 1°).
+TEST(HardProjects, PlanViewFindsTheHeadingAndTranslation) {
+  const std::vector<Scan> scans = Simulate({2, 1000, 250, 15.0, false, 7});
+  ASSERT_EQ(scans.size(), 2u);
+  GeometricOptions g;
+  g.voxel_m = SuggestVoxel(scans[0]);
+  CancelToken cancel;
+  std::vector<PlanView> views;
+  std::vector<Eigen::Isometry3d> level;
+  for (const Scan& s : scans) {
+    Expected<GeometricFeatures> f = DetectGeometricFeatures(s, g, cancel);
+    ASSERT_TRUE(f.ok()) << f.error().ToString();
+    EXPECT_TRUE(f->levelled) << s.name << " tilt " << f->tilt_rad * kDeg << "°";
+    views.push_back(MakePlanView(*f));
+    level.push_back(f->Levelling());
+  }
+  const std::vector<PlanHypothesis> h = PlanHypotheses(views[0], views[1]);
+  ASSERT_FALSE(h.empty());
+  const Eigen::Isometry3d truth = scans[0].reference_world_from_scan->inverse() * *scans[1].reference_world_from_scan;
+  const PoseError e = ComparePoses(level[0].inverse() * h[0].parent_from_child * level[1], truth);
+  EXPECT_LE(e.position_m, 0.5);
+  EXPECT_LE(e.angle_rad * kDeg, 1.0);
+  // Swapping the scans gives the inverse.
+  const std::vector<PlanHypothesis> back = PlanHypotheses(views[1], views[0]);
+  ASSERT_FALSE(back.empty());
+  const PoseError eb = ComparePoses(level[1].inverse() * back[0].parent_from_child * level[0], truth.inverse());
+  EXPECT_LE(eb.position_m, 0.5);
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
