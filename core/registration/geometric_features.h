@@ -19,7 +19,7 @@ struct GeometricOptions {
   // Sample spacing, metres; both scans of a pair must use the same. 0: derived from the data
   // (SuggestVoxel; the caller resolves it before DetectGeometricFeatures).
   double voxel_m = 0.0;
-  int max_samples = 30000;   // samples kept for normals and descriptors (thinned evenly beyond)
+  int max_samples = 15000;   // samples kept for normals and descriptors (thinned evenly beyond)
   int max_keypoints = 3000;  // samples of the child that look for a partner (thinned evenly)
   // Keypoints are the most curved samples, this fraction of them: planes (ground, façades) give
   // every sample the same descriptor and only add false matches.
