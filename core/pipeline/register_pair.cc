@@ -369,18 +369,20 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     }
     return finish();
   }
-  // A plan-view pose: the surfaces are the evidence, and the margin over the other poses tried.
+  // A plan-view pose: the surfaces are its only evidence, so they must be clear — what would make
+  // a feature-supported link weak fails it (two similar streets far apart can overlap 10 % at a
+  // plan-view pose), and so does a close second pose.
   if (!best_from_plan) link.method += " (plan-view confirmed)";
   std::string reason;
-  if (!(reason = SurfaceFailure(options.thresholds, link)).empty()) {
+  if (!(reason = SurfaceFailure(options.thresholds, link)).empty() ||
+      !(reason = SurfaceWeakness(options.thresholds, link)).empty()) {
     link.status = io::LinkStatus::kFailed;
-    link.reason = "plan-view pose: " + reason;
-  } else if (!(reason = SurfaceWeakness(options.thresholds, link)).empty()) {
-    link.status = io::LinkStatus::kWeak;
-    link.reason = "plan-view pose: " + reason;
+    link.reason = "plan-view pose without feature support: " + reason;
   } else if (rival && Score(*rival) >= 0.5 * Score(best)) {
-    link.status = io::LinkStatus::kWeak;
-    link.reason = Format("plan-view pose with a close second (score %.2f vs %.2f)", Score(*rival), Score(best));
+    link.status = io::LinkStatus::kFailed;
+    link.reason = Format("plan-view pose without feature support, and a second pose nearly as good (score %.2f vs ",
+                         Score(*rival)) +
+                  Format("%.2f)", Score(best));
   } else {
     link.status = io::LinkStatus::kOk;
     link.reason.clear();
