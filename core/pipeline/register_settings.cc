@@ -26,20 +26,29 @@ std::string Join(const std::vector<std::string>& v) {
   return s;
 }
 
-std::vector<std::string> FineNames() {
+// The names of every value of an enumerated setting, in the order the GUI lists them.
+template <typename T>
+std::vector<std::string> Names(const std::vector<T>& all, const char* (*name)(T)) {
   std::vector<std::string> names;
-  for (FineMethod m : AllFineMethods()) names.push_back(FineMethodName(m));
-  return names;
-}
-
-std::vector<std::string> FeatureNames() {
-  std::vector<std::string> names;
-  for (FeatureSources f : AllFeatureSources()) names.push_back(FeatureSourcesName(f));
+  for (T v : all) names.push_back(name(v));
   return names;
 }
 
 Status Bad(const RegisterSetting& s, const std::string& value, const std::string& want) {
   return MakeError(ErrorCode::kInvalidArgument, std::string(s.label) + ": '" + value + "' is not valid; " + want);
+}
+
+// Sets *out to the value named `value`, or says which names are valid.
+template <typename T>
+Status SetChoice(const RegisterSetting& s, const std::string& value, const std::vector<T>& all,
+                 const char* (*name)(T), T* out) {
+  for (T v : all) {
+    if (value == name(v)) {
+      *out = v;
+      return Status::Ok();
+    }
+  }
+  return Bad(s, value, "choose " + Join(s.choices));
 }
 
 Status SetNumber(const RegisterSetting& s, const std::string& value, double lo, double hi, double* out) {
@@ -56,8 +65,8 @@ Status SetNumber(const RegisterSetting& s, const std::string& value, double lo, 
 const std::vector<RegisterSetting>& RegisterSettings() {
   static const std::vector<RegisterSetting> all = {
       {"register.coarse", "coarse", "coarse method", {"3d", "epnp", "none"}},
-      {"register.features", "features", "correspondences", FeatureNames()},
-      {"register.fine", "fine", "fine method", FineNames()},
+      {"register.features", "features", "correspondences", Names(AllFeatureSources(), FeatureSourcesName)},
+      {"register.fine", "fine", "fine method", Names(AllFineMethods(), FineMethodName)},
       {"register.ratio", "ratio", "descriptor ratio t_des", {}},
       {"register.noise_m", "noise", "range noise (m)", {}},
       {"register.overlap_distance_m", "overlap-distance", "overlap distance (m)", {}},
@@ -101,24 +110,8 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
     }
     return Bad(s, value, "choose " + Join(s.choices));
   }
-  if (key == "register.fine") {
-    for (FineMethod m : AllFineMethods()) {
-      if (value == FineMethodName(m)) {
-        o->fine = m;
-        return Status::Ok();
-      }
-    }
-    return Bad(s, value, "choose " + Join(s.choices));
-  }
-  if (key == "register.features") {
-    for (FeatureSources f : AllFeatureSources()) {
-      if (value == FeatureSourcesName(f)) {
-        o->features = f;
-        return Status::Ok();
-      }
-    }
-    return Bad(s, value, "choose " + Join(s.choices));
-  }
+  if (key == "register.fine") return SetChoice(s, value, AllFineMethods(), FineMethodName, &o->fine);
+  if (key == "register.features") return SetChoice(s, value, AllFeatureSources(), FeatureSourcesName, &o->features);
   if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
   if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
   if (key == "register.overlap_distance_m") return SetNumber(s, value, 1e-6, 100.0, &o->overlap_distance_m);
