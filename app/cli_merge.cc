@@ -21,6 +21,7 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
+       {"keep-moving", false, false, "         keep points on moving objects (by default left out: no ghosts of traffic)"},
        {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"},
        {"points", true, false, "FILE.ply|FILE.las   also write the merged point cloud (the surface's vertices)"}},
       &code);
@@ -44,6 +45,7 @@ int RunMerge(const std::vector<std::string>& argv) {
   if (!max_range) return Fail(max_range.error());
   options.max_range_m = *max_range;
   options.remove_small_pieces = !args->Has("keep-pieces");
+  options.remove_moving = !args->Has("keep-moving");
   const std::string method = args->Get("method").value_or(merge::MergeMethodName(options.method));
   if (method == "ml") {
     options.method = pipeline::MergeMethod::kMaximumLikelihood;
@@ -90,6 +92,14 @@ int RunMerge(const std::vector<std::string>& argv) {
   if (points) {
     if (Status s = pipeline::WritePoints(*points, result->mesh); !s) return Fail(s.error());
     std::printf("merged point cloud: %zu points -> %s\n", result->mesh.vertices.size(), points->c_str());
+  }
+  if (options.remove_moving) {
+    std::printf("left out %zu points on moving objects (in another scanner's free space; --keep-moving keeps them):",
+                result->moving_points);
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < use.size() && k < result->moving_per_scan.size(); ++i)
+      if (use[i]) std::printf(" %s %zu", project->scans[i].name.c_str(), result->moving_per_scan[k++]);
+    std::printf("\n");
   }
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
               scans->size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,

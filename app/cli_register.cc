@@ -35,15 +35,15 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   for (const auto& s : r.scans) {
     if (s.parent >= 0) std::printf("  %s <- %s\n", scans[s.parent].name.c_str(), s.name.c_str());
   }
-  std::printf("\n%-8s %-8s %-22s %11s %8s %11s %10s %8s %9s %10s %6s %7s  %-6s %s\n", "parent", "child", "method",
-              "sift+fpfh", "reliable", "inl s+f", "consistent", "RMS mm", "overlap %", "conflict %", "iter", "time s", "status", "reason");
+  std::printf("\n%-8s %-8s %-22s %11s %8s %11s %10s %8s %9s %10s %8s %6s %7s  %-6s %s\n", "parent", "child", "method",
+              "sift+fpfh", "reliable", "inl s+f", "consistent", "RMS mm", "overlap %", "conflict %", "moving %", "iter", "time s", "status", "reason");
   for (const io::LinkRecord& l : r.links) {
     const std::string matches = std::to_string(l.matches) + "+" + std::to_string(l.geometric_matches);
     const std::string inliers =
         std::to_string(l.ransac_inliers - l.geometric_inliers) + "+" + std::to_string(l.geometric_inliers);
-    std::printf("%-8s %-8s %-22s %11s %8d %11s %10d %8.1f %9.1f %10.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(),
+    std::printf("%-8s %-8s %-22s %11s %8d %11s %10d %8.1f %9.1f %10.1f %8.1f %6d %7.2f  %-6s %s\n", l.parent.c_str(),
                 l.child.c_str(), (l.loop_check ? "check:" + l.method : l.method).c_str(), matches.c_str(), l.reliable,
-                inliers.c_str(), l.consistent, l.rms_m * 1000, l.overlap * 100, l.conflict * 100, l.iterations,
+                inliers.c_str(), l.consistent, l.rms_m * 1000, l.overlap * 100, l.conflict * 100, l.moving * 100, l.iterations,
                 l.seconds, io::LinkStatusName(l.status), l.reason.c_str());
   }
   bool any_reference = false;
@@ -104,6 +104,7 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
                      {"rms_m", l.rms_m},
                      {"overlap", l.overlap},
                      {"conflict", l.conflict},
+                     {"moving", l.moving},
                      {"iterations", l.iterations},
                      {"seconds", l.seconds},
                      {"loop_check", l.loop_check}});

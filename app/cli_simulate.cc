@@ -14,6 +14,9 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"spacing", true, false, "METRES   distance between stations (default 5)"},
     {"size", true, false, "WxH      panorama columns x rows (default 3000x750)"},
     {"noise", true, false, "METRES   range noise sigma along the line of sight (default 0.012)"},
+    {"angle-noise", true, false, "DEG      sigma of each beam's angle noise (default 0)"},
+    {"noise-growth", true, false, "M/M      range noise sigma added per metre of range (default 0; 1e-4 = +1 cm at 100 m)"},
+    {"traffic", true, false, "N        N moving vehicles and 2N pedestrians around each station, new in every scan (default 0)"},
     {"seed", true, false, "S        random seed (default 1)"},
     {"scene", true, false, "street|windows   scene kind (default street)"},
     {"far-station", false, false, "       add one station far away (no overlap)"},
@@ -33,6 +36,12 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   if (!size) return size.error();
   auto noise = args.GetDouble("noise", 0.012, 0.0, 1.0);
   if (!noise) return noise.error();
+  auto angle_noise = args.GetDouble("angle-noise", 0.0, 0.0, 1.0);
+  if (!angle_noise) return angle_noise.error();
+  auto growth = args.GetDouble("noise-growth", 0.0, 0.0, 0.01);
+  if (!growth) return growth.error();
+  auto traffic = args.GetInt("traffic", 0, 0, 200);
+  if (!traffic) return traffic.error();
   auto seed = args.GetInt("seed", 1, 0, 1 << 30);
   if (!seed) return seed.error();
   const std::string scene = args.Get("scene").value_or("street");
@@ -44,6 +53,10 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   options.scanner.cols = size->first;
   options.scanner.rows = size->second;
   options.scanner.range_noise_m = *noise;
+  options.scanner.angle_noise_deg = *angle_noise;
+  options.scanner.range_noise_per_m = *growth;
+  options.traffic.vehicles = *traffic;
+  options.traffic.pedestrians = 2 * *traffic;
   options.seed = static_cast<std::uint64_t>(*seed);
   options.scanner.seed = options.seed;
   options.scene.seed = options.seed;

@@ -30,6 +30,8 @@ struct MergedMesh {
   double seconds = 0.0;
   merge::MergeMethod method = merge::MergeMethod::kTsdf;
   double voxel_m = 0.0;
+  std::size_t moving_points = 0;
+  bool removed_moving = false;
 };
 
 struct ExportedMesh {
@@ -68,6 +70,10 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   max_range_m_->setToolTip(tr("Returns farther from their scanner are left out (sparse, noisy far returns)."));
   keep_pieces_ = new QCheckBox(tr("Keep small disconnected pieces"), this);
   keep_pieces_->setObjectName("MergeKeepPieces");
+  keep_moving_ = new QCheckBox(tr("Keep moving objects (vehicles, people)"), this);
+  keep_moving_->setObjectName("MergeKeepMoving");
+  keep_moving_->setToolTip(tr("Points one scanner saw where another saw through are moving objects; by default "
+                              "they are left out so the mesh has no ghosts of passing traffic."));
 
   auto* form = new QFormLayout;
   form->addRow(tr("Method"), method_);
@@ -75,6 +81,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   form->addRow(tr("Smoothing"), smooth_);
   form->addRow(tr("Max range"), max_range_m_);
   form->addRow(QString(), keep_pieces_);
+  form->addRow(QString(), keep_moving_);
 
   run_ = new QPushButton(tr("Merge registered scans"), this);
   run_->setObjectName("MergeRun");
@@ -116,6 +123,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   options.smooth_iterations = settings.value("merge/smooth_iterations", defaults.smooth_iterations).toInt();
   options.max_range_m = settings.value("merge/max_range_m", defaults.max_range_m).toDouble();
   options.remove_small_pieces = settings.value("merge/remove_small_pieces", defaults.remove_small_pieces).toBool();
+  options.remove_moving = settings.value("merge/remove_moving", defaults.remove_moving).toBool();
   SetOptions(options.Validate() ? options : defaults);
 
   connect(run_, &QPushButton::clicked, this, &MergePanel::Run);
@@ -140,6 +148,7 @@ merge::MergeOptions MergePanel::Options() const {
   options.smooth_iterations = smooth_->value();
   options.max_range_m = max_range_m_->value();
   options.remove_small_pieces = !keep_pieces_->isChecked();
+  options.remove_moving = !keep_moving_->isChecked();
   return options;
 }
 
@@ -149,6 +158,7 @@ void MergePanel::SetOptions(const merge::MergeOptions& options) {
   smooth_->setValue(options.smooth_iterations);
   max_range_m_->setValue(options.max_range_m);
   keep_pieces_->setChecked(!options.remove_small_pieces);
+  keep_moving_->setChecked(!options.remove_moving);
 }
 
 void MergePanel::SaveOptions() const {
@@ -159,6 +169,7 @@ void MergePanel::SaveOptions() const {
   settings.setValue("merge/smooth_iterations", options.smooth_iterations);
   settings.setValue("merge/max_range_m", options.max_range_m);
   settings.setValue("merge/remove_small_pieces", options.remove_small_pieces);
+  settings.setValue("merge/remove_moving", options.remove_moving);
 }
 
 bool MergePanel::Run() {
@@ -186,7 +197,7 @@ bool MergePanel::Run() {
         Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
         if (!r) return Expected<std::any>(r.error());
         MergedMesh merged{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
-                          options.voxel_m};
+                          options.voxel_m, r->moving_points, options.remove_moving};
         return Expected<std::any>(std::any(std::move(merged)));
       });
 }
@@ -218,13 +229,15 @@ void MergePanel::OnJobSucceeded(const QString&, const std::any& result) {
   if (const auto* merged = std::any_cast<MergedMesh>(&result)) {
     mesh_ = merged->mesh;
     scene_->SetMesh(mesh_);
-    summary_->setText(tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
-                          .arg(mesh_->triangles.size())
-                          .arg(mesh_->vertices.size())
-                          .arg(merged->scans)
-                          .arg(merged->method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
-                          .arg(merged->voxel_m * 1000.0, 0, 'f', 1)
-                          .arg(merged->seconds, 0, 'f', 1));
+    QString text = tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
+                       .arg(mesh_->triangles.size())
+                       .arg(mesh_->vertices.size())
+                       .arg(merged->scans)
+                       .arg(merged->method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
+                       .arg(merged->voxel_m * 1000.0, 0, 'f', 1)
+                       .arg(merged->seconds, 0, 'f', 1);
+    if (merged->removed_moving) text += tr("\n%L1 points on moving objects left out.").arg(merged->moving_points);
+    summary_->setText(text);
   } else if (const auto* exported = std::any_cast<ExportedMesh>(&result)) {
     summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported->triangles).arg(exported->path));
   }

@@ -74,6 +74,7 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
                                                   {"rms", tr("RMS (overlap)")},
                                                   {"overlap", tr("Overlap")},
                                                   {"conflict", tr("Free-space conflict")},
+                                                  {"moving", tr("Moving objects")},
                                                   {"iterations", tr("Iterations")},
                                                   {"time", tr("Time")},
                                                   {"error", tr("Error vs reference")},
@@ -165,6 +166,7 @@ void PairPanel::ShowResult(const pipeline::PairInspection& result) {
   SetField("rms", Mm(l.rms_m));
   SetField("overlap", Percent(l.overlap));
   SetField("conflict", Percent(l.conflict));
+  SetField("moving", Percent(l.moving));
   SetField("iterations", QString::number(l.iterations));
   SetField("time", QString("%1 s").arg(l.seconds, 0, 'f', 2));
   SetField("error", result.reference_error ? ErrorText(*result.reference_error) : tr("no reference poses"));

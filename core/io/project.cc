@@ -61,6 +61,7 @@ json LinkToJson(const LinkRecord& l) {
               {"rms_m", l.rms_m},
               {"overlap", l.overlap},
               {"conflict", l.conflict},
+              {"moving", l.moving},
               {"iterations", l.iterations},
               {"seconds", l.seconds},
               {"parent_from_child", PoseToJson(l.parent_from_child)},
@@ -86,6 +87,7 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
     l.rms_m = j.value("rms_m", 0.0);
     l.overlap = j.value("overlap", 0.0);
     l.conflict = j.value("conflict", 0.0);
+    l.moving = j.value("moving", 0.0);
     l.iterations = j.value("iterations", 0);
     l.seconds = j.value("seconds", 0.0);
     l.loop_check = j.value("loop_check", false);

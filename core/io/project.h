@@ -33,7 +33,8 @@ struct LinkRecord {
   int consistent = 0;
   double rms_m = 0.0;
   double overlap = 0.0;   // fraction [0, 1]
-  double conflict = 0.0;  // fraction of points in the other scan's free space [0, 1]
+  double conflict = 0.0;  // fraction of points in the other scan's free space on static surfaces [0, 1]
+  double moving = 0.0;    // fraction in the other's free space on object-sized clusters: moving objects [0, 1]
   int iterations = 0;
   double seconds = 0.0;
   Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();

@@ -21,6 +21,8 @@ struct MergeResult {
   std::size_t known_voxels = 0;      // grid points with a field value
   std::size_t field_bytes = 0;       // memory of the sparse grid
   std::size_t removed_triangles = 0;  // in small pieces
+  std::size_t moving_points = 0;     // points left out as moving objects (MergeOptions::remove_moving)
+  std::vector<std::size_t> moving_per_scan;  // the same per merged scan, in their order
   double seconds = 0.0;
 };
 

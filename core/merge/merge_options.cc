@@ -19,6 +19,9 @@ Status MergeOptions::Validate() const {
   if (!(max_range_m >= 0.0) || !std::isfinite(max_range_m)) {
     return bad("merge: maximum range must be >= 0 metres (0 = no limit)");
   }
+  if (!(moving_margin_m >= 0.0) || !std::isfinite(moving_margin_m)) {
+    return bad("merge: the moving-object margin must be >= 0 metres (0 = from the noise and voxel)");
+  }
   if (band_m > 0.0 && band_m < voxel_m) return bad("merge: band must be at least one voxel (or 0 for 3 voxels)");
   if (!(bin_m >= 0.0) || !std::isfinite(bin_m)) return bad("merge: histogram bin must be >= 0 metres");
   if (smooth_iterations < 0 || smooth_iterations > 100) {

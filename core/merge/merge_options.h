@@ -1,6 +1,8 @@
 // Options of the merge (SPEC §4): which signed distance field, its grid, and the mesh clean-up.
 #pragma once
 
+#include <algorithm>
+
 #include "core/common/expected.h"
 
 namespace scanreg::merge {
@@ -30,7 +32,13 @@ struct MergeOptions {
   // metres: returns farther from their scanner are left out (0 = all). Far returns are sparse and
   // noisy, and they spread the field over a large area (the street's ground to 200 m).
   double max_range_m = 0.0;
+  // Points of one scan in another scanner's free space (vehicles and people that moved between the
+  // scans, stray returns) are left out, so the mesh has no ghosts (pipeline/moving_points.h).
+  bool remove_moving = true;
+  double moving_margin_m = 0.0;  // metres nearer than the other scanner's surface; 0 = max(8 sigma, 2 voxels)
   Status Validate() const;
+
+  double MovingMargin() const { return moving_margin_m > 0.0 ? moving_margin_m : std::max(8.0 * sigma_m, 2.0 * voxel_m); }
 
   double Band() const { return band_m > 0.0 ? band_m : 3.0 * voxel_m; }
   double Bin() const { return bin_m > 0.0 ? bin_m : sigma_m / 4.0; }

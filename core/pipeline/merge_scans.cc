@@ -2,6 +2,7 @@
 
 #include "core/io/las_writer.h"
 #include "core/io/text_parse.h"
+#include "core/pipeline/moving_points.h"
 
 #include <string>
 
@@ -17,27 +18,47 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
                                                       std::to_string(scans.size()) + " scans");
   }
   std::vector<const Scan*> selected;
-  std::vector<Scan> limited;  // range-limited copies when options.max_range_m is set
-  limited.reserve(scans.size());
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    if (!use.empty() && !use[i]) continue;
-    if (options.max_range_m <= 0.0) {
-      selected.push_back(&scans[i]);
-      continue;
-    }
-    Scan copy = scans[i];
-    const float max2 = static_cast<float>(options.max_range_m * options.max_range_m);
-    for (std::size_t c = 0; c < copy.size(); ++c)
-      if (copy.valid[c] && copy.points[c].squaredNorm() > max2) copy.valid[c] = 0;
-    limited.push_back(std::move(copy));
-    selected.push_back(&limited.back());
-  }
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    if (use.empty() || use[i]) selected.push_back(&scans[i]);
   if (selected.empty()) {
     return MakeError(ErrorCode::kInvalidArgument,
                      scans.empty() ? "merge: the project has no scan"
                                    : "merge: no registered scan to merge (register the project first)");
   }
-  return merge::MergeScanSet(selected, options, progress, cancel);
+  // Points left out: beyond the maximum range, and on moving objects (seen through by another scan).
+  std::vector<std::vector<std::uint8_t>> moving;
+  if (options.remove_moving && selected.size() > 1) {
+    progress.Report(0.0, "finding moving objects");
+    MovingPointOptions m;
+    m.margin_m = options.MovingMargin();
+    moving = MovingPointMasks(selected, m, cancel);
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+  }
+  std::vector<std::size_t> moving_per_scan(selected.size(), 0);
+  std::vector<Scan> filtered;  // copies with the left-out points invalid, when any is
+  filtered.reserve(selected.size());
+  const double max2 = options.max_range_m * options.max_range_m;
+  for (std::size_t k = 0; k < selected.size(); ++k) {
+    if (options.max_range_m <= 0.0 && moving.empty()) continue;
+    Scan copy = *selected[k];
+    for (std::size_t c = 0; c < copy.size(); ++c) {
+      if (!copy.valid[c]) continue;
+      if (!moving.empty() && moving[k][c]) {
+        copy.valid[c] = 0;
+        ++moving_per_scan[k];
+      } else if (options.max_range_m > 0.0 && copy.points[c].squaredNorm() > max2) {
+        copy.valid[c] = 0;
+      }
+    }
+    filtered.push_back(std::move(copy));
+    selected[k] = &filtered.back();
+  }
+  Expected<MergeResult> result = merge::MergeScanSet(selected, options, progress, cancel);
+  if (result.ok()) {
+    result->moving_per_scan = moving_per_scan;
+    for (std::size_t n : moving_per_scan) result->moving_points += n;
+  }
+  return result;
 }
 
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return merge::WriteMeshFile(path, mesh); }

@@ -71,6 +71,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     link.overlap = e.overlap;
     link.rms_m = e.rms_m;
     link.conflict = e.conflict;
+    link.moving = e.moving;
     const LinkThresholds& t = options.thresholds;
     std::string reason;
     link.status = io::LinkStatus::kOk;

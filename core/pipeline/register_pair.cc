@@ -129,9 +129,11 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   }
   e.overlap = double(overlapping) / double(child_pts.size());
   e.rms_m = overlapping ? std::sqrt(sum_sq / double(overlapping)) : 0.0;
-  const double margin = std::max(0.2, 2 * max_distance_m);
-  e.conflict = std::max(FreeSpaceViolations(*parent.scan, *child.scan, parent_from_child, margin).fraction(),
-                        FreeSpaceViolations(*child.scan, *parent.scan, parent_from_child.inverse(), margin).fraction());
+  FreeSpaceOptions free_space;
+  free_space.margin_m = std::max(0.2, 2 * max_distance_m);
+  const PairFreeSpace f = PairFreeSpaceCheck(*parent.scan, *child.scan, parent_from_child, free_space);
+  e.conflict = f.conflict();
+  e.moving = f.moving();
   return e;
 }
 
@@ -157,8 +159,11 @@ struct Hypothesis {
 };
 
 // Overlap, discounted by free-space conflicts: a pose that puts points where the other scanner
-// saw through is wrong however well the walls overlap.
-double Score(const Hypothesis& h) { return h.evidence.overlap * std::max(0.0, 1.0 - 10.0 * h.evidence.conflict); }
+// saw through is wrong however well the walls overlap. Conflicts on object-sized clusters (traffic
+// at the true pose, or posts and cars of a pose shifted along identical façades) discount less.
+double Score(const Hypothesis& h) {
+  return h.evidence.overlap * std::max(0.0, 1.0 - 10.0 * h.evidence.conflict) * (1.0 - h.evidence.moving);
+}
 
 // Fine registration from one coarse pose, then the shared evidence.
 Hypothesis Refine(const PreparedScan& parent, const PreparedScan& child, const std::vector<Correspondence3d>& corr,
@@ -340,6 +345,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.overlap = best.evidence.overlap;
   link.rms_m = best.evidence.rms_m;
   link.conflict = best.evidence.conflict;
+  link.moving = best.evidence.moving;
   link.consistent =
       static_cast<int>(ConsistentIndices(sift_corr, best.parent_from_child, threshold, angular).size() +
                        ConsistentIndices(geometric_corr, best.parent_from_child, geometric_threshold).size());

@@ -60,7 +60,8 @@ int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const
 struct AlignmentEvidence {
   double overlap = 0.0;   // fraction of child samples with a parent sample within max_distance_m
   double rms_m = 0.0;     // RMS distance of those samples
-  double conflict = 0.0;  // free-space violations, the larger of both directions (visibility.h)
+  double conflict = 0.0;  // free-space violations on static surfaces, the larger of both directions (visibility.h)
+  double moving = 0.0;    // free-space violations in object-sized clusters (moving objects), the larger of both
 };
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m);

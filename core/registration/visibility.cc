@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <unordered_map>
 
 namespace scanreg {
 namespace {
@@ -43,40 +45,172 @@ class GridProjector {
   bool wraps_;
 };
 
+// The nearest return of the observer's 3x3 cells around q's projection; false when q does not
+// project onto a valid cell.
+bool NearestAround(const Scan& observer, const GridProjector& projector, const Eigen::Vector3d& q, double* nearest) {
+  int row = 0, col = 0;
+  if (!projector.Project(q, &row, &col) || !observer.IsValid(row, col)) return false;
+  double best = std::numeric_limits<double>::infinity();
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int r = row + dr;
+      const int c = (col + dc + observer.cols) % observer.cols;
+      if (r < 0 || r >= observer.rows || !observer.IsValid(r, c)) continue;
+      best = std::min(best, double(observer.Point(r, c).norm()));
+    }
+  }
+  *nearest = best;
+  return true;
+}
+
+// True when a grid neighbour's range differs by more than `jump` + 2 % of the range: the cell lies on
+// a depth edge, where mixed pixels float between the surfaces (in anyone's free space).
+bool AtDepthEdge(const Scan& scan, int r, int c, double jump) {
+  const double range = scan.Point(r, c).norm();
+  const int nb[4][2] = {{r - 1, c}, {r + 1, c}, {r, c - 1}, {r, c + 1}};
+  for (const auto& [nr, nc0] : nb) {
+    const int nc = (nc0 + scan.cols) % scan.cols;
+    if (nr < 0 || nr >= scan.rows || !scan.IsValid(nr, nc)) continue;
+    if (std::abs(scan.Point(nr, nc).norm() - range) > jump + 0.02 * range) return true;
+  }
+  return false;
+}
+
+// Indices of `other`'s valid points to test: every k-th row and column of an organized scan (so the
+// samples cover surfaces evenly in both directions) away from depth edges, evenly spaced indices
+// otherwise.
+std::vector<std::size_t> SampleIndices(const Scan& other, int max_samples, double edge_jump) {
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < other.size(); ++i) valid += other.valid[i] ? 1 : 0;
+  const std::size_t wanted = static_cast<std::size_t>(std::max(max_samples, 1));
+  std::vector<std::size_t> out;
+  if (other.rows > 1 && other.cols > 1) {
+    const int k = std::max(1, static_cast<int>(std::ceil(std::sqrt(double(valid) / double(wanted)))));
+    for (int r = 0; r < other.rows; r += k)
+      for (int c = 0; c < other.cols; c += k)
+        if (other.IsValid(r, c) && !AtDepthEdge(other, r, c, edge_jump)) out.push_back(other.Index(r, c));
+    return out;
+  }
+  const double stride = std::max(1.0, double(valid) / double(wanted));
+  double next = 0.0;
+  std::size_t seen = 0;
+  for (std::size_t i = 0; i < other.size(); ++i) {
+    if (!other.valid[i]) continue;
+    if (double(seen++) >= next) {
+      out.push_back(i);
+      next += stride;
+    }
+  }
+  return out;
+}
+
+// Connected clusters of points on a grid of `cell` metres (cells touching in 3D join): returns each
+// point's cluster and fills the clusters' bounding boxes.
+std::vector<int> Cluster(const std::vector<Eigen::Vector3d>& points, double cell,
+                         std::vector<Eigen::AlignedBox3d>* boxes) {
+  struct KeyHash {
+    std::size_t operator()(const Eigen::Vector3i& k) const {
+      return (std::size_t(k.x()) * 73856093u) ^ (std::size_t(k.y()) * 19349663u) ^ (std::size_t(k.z()) * 83492791u);
+    }
+  };
+  struct KeyEq {
+    bool operator()(const Eigen::Vector3i& a, const Eigen::Vector3i& b) const { return a == b; }
+  };
+  std::unordered_map<Eigen::Vector3i, int, KeyHash, KeyEq> cells;
+  std::vector<int> cell_of(points.size());
+  std::vector<Eigen::Vector3i> keys;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3i key = (points[i] / cell).array().floor().cast<int>();
+    auto [it, added] = cells.emplace(key, static_cast<int>(keys.size()));
+    if (added) keys.push_back(key);
+    cell_of[i] = it->second;
+  }
+  std::vector<int> parent(keys.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (std::size_t c = 0; c < keys.size(); ++c) {
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = cells.find(keys[c] + Eigen::Vector3i(dx, dy, dz));
+          if (it != cells.end()) parent[find(static_cast<int>(c))] = find(it->second);
+        }
+  }
+  std::vector<int> id(keys.size(), -1), cluster(points.size());
+  boxes->clear();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int root = find(cell_of[i]);
+    if (id[root] < 0) {
+      id[root] = static_cast<int>(boxes->size());
+      boxes->emplace_back();
+      boxes->back().setEmpty();
+    }
+    cluster[i] = id[root];
+    (*boxes)[id[root]].extend(points[i]);
+  }
+  return cluster;
+}
+
 }  // namespace
 
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                                    double margin_m, int max_samples) {
+                                    const FreeSpaceOptions& options) {
   FreeSpaceResult result;
   if (observer.angles.empty() || observer.rows < 3 || observer.cols < 3) return result;
   const GridProjector projector(observer);
-  std::vector<std::size_t> valid;
-  valid.reserve(other.size());
-  for (std::size_t i = 0; i < other.size(); ++i)
-    if (other.valid[i]) valid.push_back(i);
-  const std::size_t n = std::min<std::size_t>(valid.size(), static_cast<std::size_t>(std::max(max_samples, 1)));
-  const double stride = n ? double(valid.size()) / n : 1.0;
-  int tested = 0, violations = 0;
-#pragma omp parallel for reduction(+ : tested, violations) schedule(static)
-  for (long k = 0; k < static_cast<long>(n); ++k) {
-    const Eigen::Vector3d q = observer_from_other * other.points[valid[static_cast<std::size_t>(k * stride)]].cast<double>();
-    int row = 0, col = 0;
-    if (!projector.Project(q, &row, &col) || !observer.IsValid(row, col)) continue;
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int dr = -1; dr <= 1; ++dr) {
-      for (int dc = -1; dc <= 1; ++dc) {
-        const int r = row + dr;
-        const int c = (col + dc + observer.cols) % observer.cols;
-        if (r < 0 || r >= observer.rows || !observer.IsValid(r, c)) continue;
-        nearest = std::min(nearest, double(observer.Point(r, c).norm()));
-      }
-    }
-    ++tested;
-    if (nearest > q.norm() + margin_m) ++violations;
+  const std::vector<std::size_t> samples = SampleIndices(other, options.max_samples, options.margin_m);
+  std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < static_cast<long>(samples.size()); ++k) {
+    const Eigen::Vector3d q = observer_from_other * other.points[samples[k]].cast<double>();
+    double nearest = 0.0;
+    if (!NearestAround(observer, projector, q, &nearest)) continue;
+    state[k] = nearest > q.norm() + options.margin_m ? 2 : 1;
   }
-  result.tested = tested;
-  result.violations = violations;
+  std::vector<Eigen::Vector3d> violating;
+  Eigen::AlignedBox3d extent;
+  extent.setEmpty();
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    if (!state[k]) continue;
+    const Eigen::Vector3d q = observer_from_other * other.points[samples[k]].cast<double>();
+    extent.extend(q);
+    ++result.tested;
+    if (state[k] == 2) violating.push_back(q);
+  }
+  result.violations = static_cast<int>(violating.size());
+  if (violating.empty() || !(options.cluster_cell_m > 0.0)) return result;
+  std::vector<Eigen::AlignedBox3d> boxes;
+  const std::vector<int> cluster = Cluster(violating, options.cluster_cell_m, &boxes);
+  const double max_size = std::min(options.max_object_m, options.max_object_share * extent.diagonal().norm());
+  for (int c : cluster) result.moving += boxes[c].diagonal().norm() <= max_size ? 1 : 0;
+  if (result.moving_fraction() > options.max_moving) result.moving = 0;  // not traffic: everything moved
   return result;
+}
+
+PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isometry3d& a_from_b,
+                                 const FreeSpaceOptions& options) {
+  PairFreeSpace r;
+  r.a_sees_b = FreeSpaceViolations(a, b, a_from_b, options);
+  r.b_sees_a = FreeSpaceViolations(b, a, a_from_b.inverse(), options);
+  return r;
+}
+
+void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
+                         double margin_m, std::vector<std::uint8_t>* mask) {
+  mask->resize(other.size(), 0);
+  if (observer.angles.empty() || observer.rows < 3 || observer.cols < 3) return;
+  const GridProjector projector(observer);
+  std::vector<std::uint8_t>& m = *mask;
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < static_cast<long>(other.size()); ++i) {
+    if (!other.valid[i] || m[i]) continue;
+    const Eigen::Vector3d q = observer_from_other * other.points[i].cast<double>();
+    double nearest = 0.0;
+    if (NearestAround(observer, projector, q, &nearest) && nearest > q.norm() + margin_m) m[i] = 1;
+  }
 }
 
 }  // namespace scanreg

@@ -7,22 +7,64 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdint>
+#include <vector>
 
 #include "core/geometry/scan.h"
 
 namespace scanreg {
 
+//
+// Moving objects (vehicles, people) are where one scanner saw a surface and the other saw through:
+// at the correct pose they violate too. They are told apart by shape: the violations are grouped
+// into connected clusters, and a cluster no larger than a vehicle (and small against the scene) is
+// counted as `moving`, not against the pose. A wrong pose moves static surfaces (façades, the
+// street's ends, every object at once) into free space: large clusters, or more than a street's
+// worth of traffic. Limitation: a pose shifted along a street of identical flat façades, where
+// only object-sized things (posts, parked cars) conflict, looks like traffic here; it still
+// conflicts more than the true pose (PairFreeSpace::total), which ranks the candidate poses, and
+// the correspondences, rival poses and loop checks must catch it.
+struct FreeSpaceOptions {
+  double margin_m = 0.2;         // a violation is nearer than the observer's surface by more than this
+  int max_samples = 50000;       // samples of `other`, on a regular sub-grid of its cells
+  double cluster_cell_m = 1.0;   // violations within about 2 cells of each other form one cluster
+  double max_object_m = 15.0;    // bounding-box diagonal of the largest moving object (a bus: ~13 m)
+  double max_object_share = 0.1;  // ... and at most this share of the other scan's extent
+  double max_moving = 0.3;       // more than this share of samples "moving": not traffic, all count
+};
+
 struct FreeSpaceResult {
   int tested = 0;      // samples of `other` that project onto a valid cell of `observer`
   int violations = 0;  // of those, samples nearer than the observer's surface by more than the margin
+  int moving = 0;      // of the violations, those in object-sized clusters
   double fraction() const { return tested ? double(violations) / tested : 0.0; }
+  double static_fraction() const { return tested ? double(violations - moving) / tested : 0.0; }
+  double moving_fraction() const { return tested ? double(moving) / tested : 0.0; }
 };
 
-// Samples `other`'s valid points (evenly, at most max_samples), maps them into the observer's frame
-// and its panoramic grid (needs observer.angles; returns tested = 0 without them). A sample is a
-// violation when even the nearest return in the 3x3 cells around its projection is farther than
-// the sample's range + margin_m (the 3x3 minimum spares depth edges and mixed pixels).
+// Samples `other`'s valid points (a regular sub-grid of an organized scan, evenly spaced indices
+// otherwise), maps them into the observer's frame and its panoramic grid (needs observer.angles;
+// returns tested = 0 without them). A sample is a violation when even the nearest return in the
+// 3x3 cells around its projection is farther than the sample's range + margin (the 3x3 minimum
+// spares depth edges and mixed pixels).
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                                    double margin_m, int max_samples = 20000);
+                                    const FreeSpaceOptions& options);
+
+// Both directions of a pair at a pose: a's free space against b's samples and the reverse.
+struct PairFreeSpace {
+  FreeSpaceResult a_sees_b, b_sees_a;
+  double conflict() const { return std::max(a_sees_b.static_fraction(), b_sees_a.static_fraction()); }
+  double moving() const { return std::max(a_sees_b.moving_fraction(), b_sees_a.moving_fraction()); }
+  double total() const { return std::max(a_sees_b.fraction(), b_sees_a.fraction()); }
+};
+PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isometry3d& a_from_b,
+                                 const FreeSpaceOptions& options);
+
+// Marks (sets to 1) every valid point of `other` that lies in the observer's free space, without
+// sampling or clustering: after registration these are moving objects (or stray returns). `mask`
+// has other.size() entries; points already marked stay marked.
+void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
+                         double margin_m, std::vector<std::uint8_t>* mask);
 
 }  // namespace scanreg

@@ -141,7 +141,7 @@ std::string LinksSection(const io::Project& p) {
   HtmlTable t("links-table",
               {"parent", "child", "kind", "method", "SIFT matches", "FPFH matches", "reliable", "RANSAC inliers",
                "of which FPFH", "consistent", "RMS (mm)",
-               "overlap %", "conflict %", "iterations", "time (s)", "status", "reason"});
+               "overlap %", "conflict %", "moving objects %", "iterations", "time (s)", "status", "reason"});
   for (const io::LinkRecord& l : p.links) {
     const std::string kind = l.loop_check ? "loop check" : io::IsTreeLink(l) ? "tree" : "attempt";
     std::string status = io::LinkStatusName(l.status);
@@ -151,7 +151,7 @@ std::string LinksSection(const io::Project& p) {
         {Escape(l.parent), Escape(l.child), kind, Escape(l.method), std::to_string(l.matches),
          std::to_string(l.geometric_matches), std::to_string(l.reliable), std::to_string(l.ransac_inliers),
          std::to_string(l.geometric_inliers), std::to_string(l.consistent),
-         Fixed(l.rms_m * 1000, 1), Fixed(l.overlap * 100, 1), Fixed(l.conflict * 100, 1), std::to_string(l.iterations),
+         Fixed(l.rms_m * 1000, 1), Fixed(l.overlap * 100, 1), Fixed(l.conflict * 100, 1), Fixed(l.moving * 100, 1), std::to_string(l.iterations),
          Fixed(l.seconds, 2), "<span class=\"status\">" + Escape(status) + "</span>", Escape(l.reason)},
         l.loop_check ? "check" : io::LinkStatusName(l.status));
   }

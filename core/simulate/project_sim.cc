@@ -47,6 +47,10 @@ Status SimulatedProjectOptions::Validate() const {
   if (SpanOf(*this) > 900.0)
     return MakeError(ErrorCode::kInvalidArgument, "project: stations span " + std::to_string(SpanOf(*this)) +
                                                       " m; reduce the stations or the spacing (max 900 m)");
+  if (!(traffic.vehicles >= 0 && traffic.vehicles <= 500 && traffic.pedestrians >= 0 && traffic.pedestrians <= 500))
+    return MakeError(ErrorCode::kInvalidArgument, "project: traffic must be 0 to 500 vehicles and pedestrians per scan");
+  if (!(traffic.reach_m > 0.0 && traffic.reach_m <= 500.0))
+    return MakeError(ErrorCode::kInvalidArgument, "project: traffic reach must be in (0, 500] m");
   if (Status s = scanner.Validate(); !s) return s;
   return scene.Validate();
 }
@@ -69,10 +73,14 @@ std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptio
 }
 
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
-                                            const CancelToken& cancel) {
+                                            const CancelToken& cancel,
+                                            std::vector<std::vector<std::uint8_t>>* moving_cells) {
   if (Status s = options.Validate(); !s) return s.error();
   progress.Report(0.0, "building the scene");
-  const Scene scene = MakeScene(ProjectScene(options));
+  const SceneOptions street = ProjectScene(options);
+  const Scene static_scene = MakeScene(street);
+  const bool traffic = options.traffic.vehicles > 0 || options.traffic.pedestrians > 0;
+  if (moving_cells) moving_cells->clear();
   const std::vector<Eigen::Isometry3d> poses = SimulatedStationPoses(options);
   std::vector<Scan> scans;
   scans.reserve(poses.size());
@@ -84,8 +92,18 @@ Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& optio
     scanner.seed = sim::Hash(options.scanner.seed, options.seed, i);
     const double n = static_cast<double>(poses.size());
     SubProgress sub(progress, i / n, (i + 1) / n);
-    Expected<Scan> scan = SimulateScan(scene, poses[i], scanner, name, sub, cancel);
+    Scene with_traffic;
+    if (traffic) {  // the street as this scan saw it: its own vehicles and people
+      with_traffic = static_scene;
+      with_traffic.set_first_moving(
+          AddTraffic(with_traffic, street, poses[i].translation(), options.traffic, sim::Hash(options.seed, i, 0x7af)));
+      with_traffic.Build();
+    }
+    std::vector<std::uint8_t> moving;
+    Expected<Scan> scan = SimulateScan(traffic ? with_traffic : static_scene, poses[i], scanner, name, sub, cancel,
+                                       moving_cells ? &moving : nullptr);
     if (!scan) return scan.error();
+    if (moving_cells) moving_cells->push_back(std::move(moving));
     scans.push_back(std::move(scan).value());
   }
   return scans;

@@ -11,6 +11,7 @@
 #include "core/geometry/scan.h"
 #include "core/simulate/scanner.h"
 #include "core/simulate/scene.h"
+#include "core/simulate/traffic.h"
 
 namespace scanreg {
 
@@ -22,13 +23,16 @@ struct SimulatedProjectOptions {
   std::uint64_t seed = 1;    // station positions, headings, tilts and per-scan noise
   double max_tilt_deg = 0.5;  // degrees: random tilt of each station from upright
   bool add_far_station = false;  // one extra station at a separate site > 1 km away (no overlap)
+  TrafficOptions traffic;        // moving vehicles and pedestrians, placed anew for each scan
 
   Status Validate() const;
 };
 
 // Scans named "s01", "s02", ... in station order along +x; the far station, if any, comes last.
+// moving_cells, when given, receives per scan the cells that returned from moving objects.
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
-                                            const CancelToken& cancel);
+                                            const CancelToken& cancel,
+                                            std::vector<std::vector<std::uint8_t>>* moving_cells = nullptr);
 
 // The true scanner poses SimulateProject uses (no scanning), in the same order.
 std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptions& options);

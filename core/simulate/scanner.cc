@@ -15,7 +15,14 @@ Status Invalid(const std::string& what) { return MakeError(ErrorCode::kInvalidAr
 constexpr double kDeg = M_PI / 180.0;
 
 // Hash streams of a cell.
-enum Stream : std::uint64_t { kMixedChance = 1, kMixedWeight = 2, kRangeNoise = 3, kReflNoise = 4 };
+enum Stream : std::uint64_t {
+  kMixedChance = 1,
+  kMixedWeight = 2,
+  kRangeNoise = 3,
+  kReflNoise = 4,
+  kAzimuthNoise = 5,
+  kElevationNoise = 6
+};
 
 }  // namespace
 
@@ -37,6 +44,10 @@ Status ScannerOptions::Validate() const {
                    std::to_string(max_range_m) + ")");
   if (!(range_noise_m >= 0.0 && range_noise_m < 1.0))
     return Invalid("range noise " + std::to_string(range_noise_m) + " m must be in [0, 1) m");
+  if (!(range_noise_per_m >= 0.0 && range_noise_per_m < 0.01))
+    return Invalid("range noise growth " + std::to_string(range_noise_per_m) + " m/m must be in [0, 0.01)");
+  if (!(angle_noise_deg >= 0.0 && angle_noise_deg <= 1.0))
+    return Invalid("angle noise " + std::to_string(angle_noise_deg) + "° must be in [0, 1]°");
   if (!(reflectance_noise >= 0.0 && reflectance_noise <= 1.0))
     return Invalid("reflectance noise " + std::to_string(reflectance_noise) + " must be in [0, 1]");
   if (!(falloff_range_m > 0.0)) return Invalid("fall-off range must be positive");
@@ -49,7 +60,7 @@ Status ScannerOptions::Validate() const {
 
 Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_from_scanner,
                             const ScannerOptions& options, std::string name, ProgressSink& progress,
-                            const CancelToken& cancel) {
+                            const CancelToken& cancel, std::vector<std::uint8_t>* moving_cells) {
   if (Status s = options.Validate(); !s) return s.error();
   const int rows = options.rows, cols = options.cols;
   Scan scan(std::move(name), rows, cols);
@@ -107,6 +118,11 @@ Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_f
   // Pass 2: mixed pixels, noise, points in the scanner frame.
   const double sigma = options.range_noise_m, refl_sigma = options.reflectance_noise;
   const std::uint64_t seed = options.seed;
+  const double angle_sigma = options.angle_noise_deg * kDeg;
+  if (moving_cells) {
+    moving_cells->assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) (*moving_cells)[i] = range[i] > 0.0f && scene.IsMoving(primitive[i]);
+  }
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
@@ -145,9 +161,14 @@ Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_f
           }
         }
       }
-      rho += sigma * sim::GaussianFromHash(sim::Hash(seed, i, kRangeNoise));
+      rho += (sigma + options.range_noise_per_m * rho) * sim::GaussianFromHash(sim::Hash(seed, i, kRangeNoise));
       refl += refl_sigma * sim::GaussianFromHash(sim::Hash(seed, i, kReflNoise));
-      const Eigen::Vector3d los(cos_el[r] * cos_az[c], cos_el[r] * sin_az[c], sin_el[r]);
+      Eigen::Vector3d los(cos_el[r] * cos_az[c], cos_el[r] * sin_az[c], sin_el[r]);
+      if (angle_sigma > 0.0) {  // the encoders' error: the point lies off the cell's nominal direction
+        const double az = std::atan2(los.y(), los.x()) + angle_sigma * sim::GaussianFromHash(sim::Hash(seed, i, kAzimuthNoise));
+        const double el = std::asin(los.z()) + angle_sigma * sim::GaussianFromHash(sim::Hash(seed, i, kElevationNoise));
+        los = Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      }
       if (!options.reflectance) refl = 0.5;
       scan.Set(r, c, (rho * los).cast<float>(), static_cast<float>(std::clamp(refl, 0.0, 1.0)));
     }

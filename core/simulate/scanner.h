@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/common/expected.h"
 #include "core/common/progress.h"
@@ -25,6 +26,8 @@ struct ScannerOptions {
   double min_range_m = 1.0;          // metres; nearer surfaces give no return
   double max_range_m = 200.0;        // metres; farther surfaces (and the sky) give no return
   double range_noise_m = 0.012;      // sigma of Gaussian range noise along the line of sight, metres
+  double range_noise_per_m = 0.0;    // added to that sigma per metre of range (1e-4: +1 cm at 100 m)
+  double angle_noise_deg = 0.0;      // sigma of Gaussian noise of each beam's azimuth and elevation, degrees
   double reflectance_noise = 0.02;   // sigma of additive Gaussian reflectance noise, reflectance units
   bool reflectance = true;           // false: every return has reflectance 0.5 (no usable intensity)
   double falloff_range_m = 60.0;     // metres at which the returned intensity has halved (1 / (1 + r / this))
@@ -40,8 +43,10 @@ struct ScannerOptions {
 // Simulates one scan from the scanner pose world_from_scanner. The returned Scan has points in the
 // scanner frame, scan.angles filled, world_from_scan = Identity (unregistered) and
 // reference_world_from_scan = world_from_scanner. Cancellation is checked once per row.
+// moving_cells, when given, receives 1 for each cell whose return came from a moving object
+// (Scene::IsMoving), 0 elsewhere: the truth for moving-object detection.
 Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_from_scanner,
                             const ScannerOptions& options, std::string name, ProgressSink& progress,
-                            const CancelToken& cancel);
+                            const CancelToken& cancel, std::vector<std::uint8_t>* moving_cells = nullptr);
 
 }  // namespace scanreg

@@ -49,6 +49,9 @@ class Scene {
                                          double max_range) const;
 
   int num_primitives() const { return static_cast<int>(prims_.size()); }
+  // Primitives from `first` on are moving objects (traffic.h): present in this scan only.
+  void set_first_moving(int first) { first_moving_ = first; }
+  bool IsMoving(int primitive) const { return primitive >= first_moving_; }
   const Eigen::AlignedBox3d& primitive_bounds(int i) const { return prims_[i].bounds; }
 
  private:
@@ -78,6 +81,7 @@ class Scene {
   std::vector<Primitive> prims_;
   std::vector<Node> nodes_;
   std::vector<int> order_;
+  int first_moving_ = 1 << 30;
 };
 
 struct SceneOptions {
