@@ -1,7 +1,9 @@
 #include "core/io/pcd.h"
 
 #include <pcl/PCLPointCloud2.h>
+#include <pcl/console/print.h>
 #include <pcl/conversions.h>
+#include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
@@ -10,6 +12,7 @@
 
 #include "core/common/atomic_file.h"
 #include "core/io/organize_default.h"
+#include "core/io/pcd_header.h"
 
 namespace scanreg::io {
 
@@ -28,6 +31,8 @@ Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress
   if (!std::filesystem::exists(path, ec)) {
     return MakeError(ErrorCode::kNotFound, path.string() + ": no such file; check the path");
   }
+  // PCL trusts the header: check it against itself and the file's size first.
+  if (Expected<PcdHeader> header = ReadPcdHeader(path); !header) return header.error();
   const std::string stage = "reading " + path.filename().string();
   progress.Report(0.0, stage);
   pcl::PCLPointCloud2 blob;
@@ -35,10 +40,19 @@ Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
   int version = 0;
   pcl::PCDReader reader;
-  if (reader.read(path.string(), blob, origin, orientation, version) < 0) {
-    return MakeError(ErrorCode::kParseError, path.string() +
-                                                 ": PCL cannot read this PCD file (see the PCL message above); is it a "
-                                                 "complete PCD file?");
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // our one-line errors instead of PCL's prints
+  int read = -1;
+  std::string pcl_message;
+  try {
+    read = reader.read(path.string(), blob, origin, orientation, version);
+  } catch (const std::exception& e) {  // pcl::PCLException, std::bad_alloc
+    pcl_message = std::string(" (") + e.what() + ")";
+  }
+  if (read < 0) {
+    return MakeError(ErrorCode::kParseError,
+                     path.string() + ": PCL cannot read the data of this PCD file" + pcl_message +
+                         "; the header is consistent, so the data section is damaged (a value that is not a "
+                         "number, a short line, corrupt compression)");
   }
   if (!HasField(blob, "x") || !HasField(blob, "y") || !HasField(blob, "z")) {
     return MakeError(ErrorCode::kUnsupported, path.string() + ": the PCD file has no x, y, z fields");
@@ -124,7 +138,13 @@ Status WritePcd(const std::filesystem::path& path, const Scan& scan, ProgressSin
   if (Status s = file.Open(); !s) return s;
   if (Status s = file.CloseForExternalWriter(); !s) return s;
   pcl::PCDWriter writer;
-  if (writer.writeBinary(file.temp_path().string(), cloud) < 0) {
+  int written = -1;
+  try {
+    written = writer.writeBinary(file.temp_path().string(), cloud);
+  } catch (const std::exception&) {  // pcl::IOException on a full disk
+    written = -1;
+  }
+  if (written < 0) {
     return MakeError(ErrorCode::kIoError, path.string() +
                                               ": PCL could not write the PCD file; check the folder "
                                               "is writable and has free space");

@@ -6,7 +6,8 @@
 // sensor origin with a step from the point density (OrganizeCloudByDensity). The PCD viewpoint
 // (sensor_origin_, sensor_orientation_) becomes world_from_scan; points stay in the sensor frame.
 // Reflectance = the intensity field when present, else 0.5. No angular grid for organized PCDs
-// (they are often perspective cameras).
+// (they are often perspective cameras). The header is checked first (pcd_header.h): PCL trusts it;
+// PCL's own console messages are silenced, its failures become one error naming the file.
 #pragma once
 
 #include <filesystem>

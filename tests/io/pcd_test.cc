@@ -95,6 +95,56 @@ TEST(Pcd, MissingAndBrokenFiles) {
   EXPECT_NE(r.error().message.find("broken.pcd"), std::string::npos);
 }
 
+// Headers that disagree with themselves or with the file's size are refused before PCL reads the
+// data (issue 16: PCL crashed, allocated gigabytes, or returned 0 points with success).
+TEST(Pcd, InconsistentHeadersAreNamedBeforePclReadsTheData) {
+  TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const std::string fields = "VERSION 0.7\nFIELDS x y z\n";
+  const std::string sizes = "SIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  struct Case {
+    std::string name, text, expected;
+  };
+  const std::vector<Case> cases = {
+      {"size.pcd", fields + "SIZE 1.5 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "size.pcd:3: SIZE must be 1, 2, 4 or 8"},
+      {"count.pcd", fields + "SIZE 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "3 FIELDS but 2 SIZE"},
+      {"points.pcd", fields + sizes + "WIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n1 2 3\n", "POINTS 3 is not WIDTH x HEIGHT"},
+      {"float2.pcd", fields + "SIZE 2 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "TYPE F with SIZE 2"},
+      {"huge.pcd", fields + sizes + "WIDTH 1073741824\nHEIGHT 1\nPOINTS 1073741824\nDATA binary\n0123456789ab",
+       "truncated: the header declares 1073741824 points"},
+      {"hugeascii.pcd", fields + sizes + "WIDTH 1000000000\nHEIGHT 1\nPOINTS 1000000000\nDATA ascii\n1 2 3\n",
+       "truncated: the header declares 1000000000 points"},
+      {"compressed.pcd",
+       fields + sizes + "WIDTH 10\nHEIGHT 1\nPOINTS 10\nDATA binary_compressed\n" + std::string("\x04\0\0\0\xff\xff\0\0abcd", 12),
+       "unpacks to 65535 bytes, not the 120 bytes"},
+      {"noxyz.pcd", "VERSION 0.7\nFIELDS a b c\n" + sizes + "WIDTH 1\nPOINTS 1\nDATA ascii\n1 2 3\n", "no x, y, z fields"},
+      {"unknown.pcd", fields + sizes + "WIDTH 1\nBOGUS \x01\x02\nDATA ascii\n1 2 3\n", "unknown header entry 'BOGUS'"},
+      {"nodata.pcd", fields + sizes + "WIDTH 1\n", "the header ends before its DATA line"},
+      {"zero.pcd", fields + sizes + "WIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA ascii\n", "no points"},
+  };
+  for (const Case& c : cases) {
+    test::WriteBytes(dir / c.name, c.text);
+    Expected<Scan> r = ReadPcd(dir / c.name, progress, cancel);
+    ASSERT_FALSE(r.ok()) << c.name << " was accepted";
+    EXPECT_EQ(r.error().code, ErrorCode::kParseError) << c.name;
+    EXPECT_NE(r.error().message.find(c.expected), std::string::npos) << c.name << ": " << r.error().message;
+    EXPECT_NE(r.error().message.find(c.name), std::string::npos) << "names the file: " << r.error().message;
+    for (char ch : r.error().message) EXPECT_TRUE(ch >= 32 || ch == '\n') << c.name << ": control byte echoed";
+  }
+  // A directory is not a PCD file.
+  Expected<Scan> r = ReadPcd(dir.path(), progress, cancel);
+  ASSERT_FALSE(r.ok());
+  // A consistent small ASCII file still reads.
+  test::WriteBytes(dir / "ok.pcd", fields + sizes + "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n");
+  Expected<Scan> ok = ReadPcd(dir / "ok.pcd", progress, cancel);
+  ASSERT_TRUE(ok.ok()) << ok.error().ToString();
+  EXPECT_EQ(ok->CountValid(), 2u);
+}
+
 TEST(OrganizeDefault, StepFollowsPointSpacing) {
   // A regular 0.5 deg pattern over 90 x 30 deg: the estimated spacing is ~0.5 deg.
   std::vector<Eigen::Vector3f> points;
