@@ -94,7 +94,7 @@ int RunMerge(const std::vector<std::string>& argv) {
     std::printf("merged point cloud: %zu points -> %s\n", result->mesh.vertices.size(), points->c_str());
   }
   if (options.remove_moving) {
-    std::printf("left out %zu points on moving objects (in another scanner's free space; --keep-moving keeps them):",
+    std::printf("left out %zu points lying in another scanner's free space (moving objects, stray returns; --keep-moving keeps them):",
                 result->moving_points);
     std::size_t k = 0;
     for (std::size_t i = 0; i < use.size() && k < result->moving_per_scan.size(); ++i)

@@ -236,7 +236,7 @@ void MergePanel::OnJobSucceeded(const QString&, const std::any& result) {
                        .arg(merged->method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
                        .arg(merged->voxel_m * 1000.0, 0, 'f', 1)
                        .arg(merged->seconds, 0, 'f', 1);
-    if (merged->removed_moving) text += tr("\n%L1 points on moving objects left out.").arg(merged->moving_points);
+    if (merged->removed_moving) text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).").arg(merged->moving_points);
     summary_->setText(text);
   } else if (const auto* exported = std::any_cast<ExportedMesh>(&result)) {
     summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported->triangles).arg(exported->path));
