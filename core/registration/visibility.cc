@@ -163,9 +163,10 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   const GridProjector projector(observer);
   const std::vector<std::size_t> samples = SampleIndices(other, options.max_samples, options.margin_m);
   std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
+  std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < static_cast<long>(samples.size()); ++k) {
-    const Eigen::Vector3d q = observer_from_other * other.points[samples[k]].cast<double>();
+    const Eigen::Vector3d q = mapped[k] = observer_from_other * other.points[samples[k]].cast<double>();
     double nearest = 0.0;
     if (!NearestAround(observer, projector, q, &nearest)) continue;
     state[k] = nearest > q.norm() + options.margin_m ? 2 : 1;
@@ -175,7 +176,7 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   extent.setEmpty();
   for (std::size_t k = 0; k < samples.size(); ++k) {
     if (!state[k]) continue;
-    const Eigen::Vector3d q = observer_from_other * other.points[samples[k]].cast<double>();
+    const Eigen::Vector3d& q = mapped[k];
     extent.extend(q);
     ++result.tested;
     if (state[k] == 2) violating.push_back(q);
