@@ -188,10 +188,12 @@ int RunRegister(const std::vector<std::string>& argv) {
         "both|sift|fpfh   correspondences: SIFT on the reflectance (W), FPFH on the geometry, or "
         "both into one estimator (default); levelled scans also get plan-view poses"},
        {"overlap-distance", true, false,
-        "METRES   a child point this near the parent's surface overlaps (default "
-        "0.10; with --coarse none a few times the current pose error)"},
+        "METRES   a child point this near the parent's surface overlaps; the other lengths "
+        "(ICP samples, inlier and loop tolerances, RMS limits) follow it (default: from the data, "
+        "max(8 x noise, 2 x point spacing, extent / 100); with --coarse none also how far apart the "
+        "current poses are)"},
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
-       {"noise", true, false, "METRES   scanner range noise sigma (default 0.012)"},
+       {"noise", true, false, "METRES   scanner range noise sigma (default: from the data, the scans' local plane residuals)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
        {"global", false, false,
         "       global registration: pose graph over every link, all links loop-checked (default)"},

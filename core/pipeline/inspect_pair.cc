@@ -3,6 +3,7 @@
 #include "core/features/confusion.h"
 #include "core/features/feature_cache.h"
 #include "core/pipeline/register_project.h"
+#include "core/pipeline/scale_defaults.h"
 #include "core/registration/point_index.h"
 #include "core/registration/surface_distance.h"
 #include "core/registration/voxel_filter.h"
@@ -35,14 +36,17 @@ void Overlay(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen
 
 }  // namespace
 
-Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, const RegisterOptions& options,
+Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, const RegisterOptions& raw_options,
                                      const InspectOptions& inspect, ProgressSink& progress, const CancelToken& cancel) {
-  if (Status s = options.Validate(); !s) return s.error();
+  if (Status s = raw_options.Validate(); !s) return s.error();
   for (const Scan* s : {&parent, &child}) {
     if (s->CountValid() == 0) {
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + s->name + "' has no valid point; remove it");
     }
   }
+  const Expected<RegisterOptions> resolved = ResolveLengths(raw_options, {&parent, &child});
+  if (!resolved) return resolved.error();
+  const RegisterOptions& options = *resolved;
   PairInspection out;
   PreparedScan prepared[2];
   const Scan* scans[2] = {&parent, &child};

@@ -11,6 +11,7 @@
 #include "core/pipeline/fine_align.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
+#include "core/pipeline/scale_defaults.h"
 #include "core/registration/point_index.h"
 #include "core/registration/voxel_filter.h"
 
@@ -46,15 +47,30 @@ std::string Format(const char* fmt, double a, double b) {
 }
 
 // Refines one pair from the current poses and classifies it from the shared evidence.
+// evidence_m: the distance of the overlap and RMS evidence (the data's overlap distance; the
+// refinement's reach, options.overlap_distance_m, may be larger).
 io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& initial,
-                          const RegisterOptions& options, const CancelToken& cancel) {
+                          const RegisterOptions& options, double evidence_m, const CancelToken& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   io::LinkRecord link;
   link.parent = parent.scan->name;
   link.child = child.scan->name;
   link.method = std::string("none+") + FineMethodName(options.fine);
   link.parent_from_child = initial;
-  Expected<FineResult> fine = AlignFine(parent, child, initial, options, cancel);
+  // EM from far (the reach several times the evidence distance) stalls on a wrong pose where
+  // dense ICP does not (the bunny from 5 deg / 5 mm: one loop 2 deg open): dense ICP first, then
+  // the EM from there within 4 evidence distances.
+  Eigen::Isometry3d start = initial;
+  RegisterOptions fine_options = options;
+  if (options.fine != FineMethod::kDense && options.overlap_distance_m > 4 * evidence_m) {
+    RegisterOptions icp = options;
+    icp.fine = FineMethod::kDense;
+    if (Expected<FineResult> pre = AlignFine(parent, child, initial, icp, cancel); pre && pre->iterations > 0) {
+      start = pre->parent_from_child;
+      fine_options.overlap_distance_m = 4 * evidence_m;
+    }
+  }
+  Expected<FineResult> fine = AlignFine(parent, child, start, fine_options, cancel);
   if (!fine) {
     link.status = io::LinkStatus::kFailed;
     link.reason = fine.error().message;
@@ -67,7 +83,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     for (const Eigen::Vector3d& p : child.samples) centre += p;
     centre /= std::max<double>(1.0, child.samples.size());
     const double moved = (link.parent_from_child * centre - initial * centre).norm();
-    const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, options.overlap_distance_m);
+    const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, evidence_m);
     link.overlap = e.overlap;
     link.rms_m = e.rms_m;
     link.conflict = e.conflict;
@@ -120,9 +136,24 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
                      "coarse method none (refine from the current poses) has no feature matches for the fine method "
                      "keypoints; use em, projective-icp or dense");
   }
-  const RegisterOptions options = ScaledOptions(raw_options);
   const int n = static_cast<int>(scans.size());
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
+  std::vector<const Scan*> all;
+  for (const Scan& s : scans) all.push_back(&s);
+  ProjectScale scale;
+  Expected<RegisterOptions> resolved = ResolveLengths(raw_options, all, &scale);
+  if (!resolved) return resolved.error();
+  const double evidence_m = resolved->overlap_distance_m;
+  if (raw_options.overlap_distance_m == 0) {
+    // The fine step starts from the current poses: its reach, and the overlap that links scans,
+    // follow how far apart they are (the RMS thresholds stay at the data's scale).
+    resolved->overlap_distance_m = StartDistance(scans, resolved->overlap_distance_m, scale.extent_m);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "refining from the current poses: overlap distance %.3g m (how far apart they are)",
+                  resolved->overlap_distance_m);
+    LogInfo(buf);
+  }
+  const RegisterOptions options = ScaledOptions(*resolved);
   const auto t_start = std::chrono::steady_clock::now();
   ProjectRegistration result;
 
@@ -161,7 +192,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
   source.register_pair = [&](int parent, int child) {
     const Eigen::Isometry3d initial = scans[parent].world_from_scan.inverse() * scans[child].world_from_scan;
     PairResult r;
-    r.link = RefinePair(prepared[parent], prepared[child], initial, options, cancel);
+    r.link = RefinePair(prepared[parent], prepared[child], initial, options, evidence_m, cancel);
     return r;
   };
   source.verb = "refining";

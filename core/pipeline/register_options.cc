@@ -1,5 +1,7 @@
 #include "core/pipeline/register_options.h"
 
+#include "core/pipeline/scale_defaults.h"
+
 namespace scanreg::pipeline {
 
 const char* FineMethodName(FineMethod method) {
@@ -50,19 +52,31 @@ Status LinkThresholds::Validate() const {
   return Status::Ok();
 }
 
+RegisterOptions::RegisterOptions() {
+  coarse.inlier_threshold_m = 0;
+  coarse.ambiguity_distance_m = 0;
+  dense_icp.voxel_m = 0;
+  dense_icp.max_correspondence_schedule_m.clear();
+  dense_icp.robust_scale_floor_m = 0;
+  keypoint_icp.max_correspondence_m = 0;
+  reliability.max_range_std_m = 0;
+}
+
 Status RegisterOptions::Validate() const {
-  for (Status s : {sift.Validate(), match.Validate(), reliability.Validate(), coarse.Validate(),
-                   keypoint_icp.Validate(), dense_icp.Validate(), thresholds.Validate()}) {
+  if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
+    return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m (0: from the data)");
+  }
+  if (!(overlap_distance_m >= 0 && overlap_distance_m <= 100)) {
+    return MakeError(ErrorCode::kInvalidArgument, "the overlap distance must be between 0 and 100 m (0: from the data)");
+  }
+  // Unset lengths checked at nominal values (they are resolved from the data when registering).
+  const RegisterOptions o = WithLengths(*this, 0.012, overlap_distance_m > 0 ? overlap_distance_m : 0.1);
+  for (Status s : {o.sift.Validate(), o.match.Validate(), o.reliability.Validate(), o.coarse.Validate(),
+                   o.keypoint_icp.Validate(), o.dense_icp.Validate(), o.thresholds.Validate()}) {
     if (!s) return s;
   }
   if (UsesGeometric(features)) {
     if (Status s = geometric.Validate(); !s) return s;
-  }
-  if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
-    return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m");
-  }
-  if (!(overlap_distance_m > 0)) {
-    return MakeError(ErrorCode::kInvalidArgument, "the overlap distance must be positive");
   }
   return Status::Ok();
 }

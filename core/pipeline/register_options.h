@@ -46,14 +46,20 @@ struct LinkThresholds {
   int weak_inliers = 15;
   double min_overlap = 0.05;    // fraction of the child's samples near the parent; less: failed
   double weak_overlap = 0.15;   // less: weak
-  double max_rms_m = 0.10;      // RMS of the overlap distances above this: failed
-  double weak_rms_m = 0.04;     // above this: weak (about 3 sigma of 12 mm noise)
+  // Lengths: 0 = from the data (scale_defaults.h): the overlap distance d and 0.4 d (street: 0.10, 0.04 m).
+  double max_rms_m = 0.0;   // RMS of the overlap distances above this: failed
+  double weak_rms_m = 0.0;  // above this: weak
   double max_conflict = 0.05;   // free-space violations (visibility.h) above this: failed
   double weak_conflict = 0.02;  // above this: weak
   Status Validate() const;
 };
 
+// Every length below left at 0 is taken from the scans when a registration starts
+// (core/pipeline/scale_defaults.h): the range noise, the overlap distance d, and the others as
+// multiples of d (coarse inlier threshold d and ambiguity 5 d, dense ICP voxel d and schedule
+// 10/4/2 d, keypoint ICP 2 d, W's t_std d, loop tolerance d, RMS thresholds d and 0.4 d).
 struct RegisterOptions {
+  RegisterOptions();  // the sub-options' lengths unset (0)
   FeatureSources features = FeatureSources::kBoth;
   SiftOptions sift;
   GeometricOptions geometric;  // voxel_m 0: the median of SuggestVoxel over the project's scans
@@ -64,14 +70,14 @@ struct RegisterOptions {
   IcpOptions keypoint_icp;
   DenseIcpOptions dense_icp;
   LinkThresholds thresholds;
-  double range_sigma_m = 0.012;      // scanner range noise; sets the consistency threshold
-  double overlap_distance_m = 0.10;  // a child sample within this of the parent surface overlaps
+  double range_sigma_m = 0.0;       // scanner range noise; sets the consistency threshold
+  double overlap_distance_m = 0.0;  // a child sample within this of the parent surface overlaps
   // Loop check (beyond W): each scan is also registered to its best other neighbour; a loop that
   // does not close within these tolerances fails both links (wrong links on repeated façades).
   bool verify_loops = true;
   bool verify_all_links = false;  // false: only weak links are checked (global registration checks all)
   int min_check_matches = 20;     // a neighbour needs this many matches to serve as a check
-  double loop_tolerance_m = 0.10;
+  double loop_tolerance_m = 0.0;
   double loop_tolerance_rad = 0.5 * M_PI / 180.0;
   // Global registration (issue 4): a pose graph over every accepted link (tree + loop checks),
   // Cauchy kernel, root fixed; it implies a loop check of every link (the graph's extra links).

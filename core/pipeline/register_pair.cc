@@ -19,7 +19,7 @@ namespace scanreg::pipeline {
 namespace {
 
 std::string Format(const char* fmt, double a, double b = 0.0) {
-  char buf[160];
+  char buf[400];
   std::snprintf(buf, sizeof buf, fmt, a, b);
   return buf;
 }
@@ -130,7 +130,7 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   e.overlap = double(overlapping) / double(child_pts.size());
   e.rms_m = overlapping ? std::sqrt(sum_sq / double(overlapping)) : 0.0;
   FreeSpaceOptions free_space;
-  free_space.margin_m = std::max(0.2, 2 * max_distance_m);
+  free_space.margin_m = 2 * max_distance_m;
   const PairFreeSpace f = PairFreeSpaceCheck(*parent.scan, *child.scan, parent_from_child, free_space);
   e.conflict = f.conflict();
   e.moving = f.moving();
@@ -292,7 +292,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   // FPFH within their sampling threshold.
   const std::vector<Correspondence3d> sift_corr(corr.begin(), corr.begin() + n_sift);
   const std::vector<Correspondence3d> geometric_corr(corr.begin() + n_sift, corr.end());
-  const double threshold = ConsistencyThreshold(options.range_sigma_m);
+  const double threshold = ConsistencyThreshold(options.range_sigma_m, 3.0, 0.3 * options.overlap_distance_m);
 
   // Fine registration of every start: the correspondences' best pose and its distinct competitor
   // (repeated façades), and the plan-view poses. The surfaces, not the feature counts, decide
@@ -389,6 +389,15 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     link.reason = Format("plan-view pose without feature support, and a second pose nearly as good (score %.2f vs ",
                          Score(*rival)) +
                   Format("%.2f)", Score(best));
+  } else if (link.moving > options.thresholds.weak_conflict) {
+    // Object-sized conflicts are traffic at the true pose, but also the posts and cars of a pose
+    // turned or shifted along a symmetric street (measured: a 180° turn, 1.3 % static and 12.6 %
+    // object-sized conflict): without features to tell, the link is weak, so its loop is checked.
+    link.status = io::LinkStatus::kWeak;
+    link.reason = Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
+                         "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop confirms it",
+                         100 * link.moving);
+    result.needs_loop = true;
   } else {
     link.status = io::LinkStatus::kOk;
     link.reason.clear();

@@ -39,6 +39,9 @@ struct PairResult {
   Eigen::Isometry3d coarse_parent_from_child = Eigen::Isometry3d::Identity();
   bool coarse_ok = false;
   std::vector<int> coarse_inlier_matches;  // indices into `matches` of the coarse RANSAC inliers, ascending
+  // Evidence too weak to chain on its own (a plan-view pose with object-sized conflicts): the link
+  // is failed unless a loop through another scan closes on it (registration_driver.h).
+  bool needs_loop = false;
 };
 
 // matches: parent's SIFT descriptors (query) matched in the child (train); geometric: FPFH matches

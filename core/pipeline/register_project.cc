@@ -15,6 +15,7 @@
 #include "core/pipeline/refine_project.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
+#include "core/pipeline/scale_defaults.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -123,11 +124,9 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                                             const std::vector<std::optional<std::string>>& parent_override,
                                             const std::vector<std::pair<std::string, std::string>>& rejected,
-                                            const RegisterOptions& options, ProgressSink& progress,
+                                            const RegisterOptions& raw_options, ProgressSink& progress,
                                             const CancelToken& cancel) {
-  if (Status s = options.Validate(); !s) return s.error();
-  if (options.from_current_poses)
-    return RegisterFromCurrentPoses(scans, parent_override, rejected, options, progress, cancel);
+  if (Status s = raw_options.Validate(); !s) return s.error();
   const int n = static_cast<int>(scans.size());
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
   for (const Scan& s : scans) {
@@ -135,6 +134,13 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + s.name + "' has no valid point; remove it");
     }
   }
+  if (raw_options.from_current_poses)
+    return RegisterFromCurrentPoses(scans, parent_override, rejected, raw_options, progress, cancel);
+  std::vector<const Scan*> all;
+  for (const Scan& s : scans) all.push_back(&s);
+  const Expected<RegisterOptions> resolved = ResolveLengths(raw_options, all);
+  if (!resolved) return resolved.error();
+  const RegisterOptions& options = *resolved;
   const auto t_start = std::chrono::steady_clock::now();
   ProjectRegistration result;
 
@@ -146,8 +152,6 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   std::vector<PreparedScan> prepared(n);
   auto t0 = std::chrono::steady_clock::now();
   RegisterOptions prepare_options = options;
-  std::vector<const Scan*> all;
-  for (const Scan& s : scans) all.push_back(&s);
   prepare_options.geometric.voxel_m = GeometricVoxel(all, options);
   for (int i = 0; i < n; ++i) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");

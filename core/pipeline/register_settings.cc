@@ -68,8 +68,8 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.features", "features", "correspondences", Names(AllFeatureSources(), FeatureSourcesName)},
       {"register.fine", "fine", "fine method", Names(AllFineMethods(), FineMethodName)},
       {"register.ratio", "ratio", "descriptor ratio t_des", {}},
-      {"register.noise_m", "noise", "range noise (m)", {}},
-      {"register.overlap_distance_m", "overlap-distance", "overlap distance (m)", {}},
+      {"register.noise_m", "noise", "range noise (m; 0: from the data)", {}},
+      {"register.overlap_distance_m", "overlap-distance", "overlap distance (m; 0: from the data)", {}},
       {"register.global", "global", "global registration", {}, true},
       {"register.keep_imported", "keep-imported", "keep imported poses fixed", {}, true},
   };
@@ -114,7 +114,7 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   if (key == "register.features") return SetChoice(s, value, AllFeatureSources(), FeatureSourcesName, &o->features);
   if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
   if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
-  if (key == "register.overlap_distance_m") return SetNumber(s, value, 1e-6, 100.0, &o->overlap_distance_m);
+  if (key == "register.overlap_distance_m") return SetNumber(s, value, 0.0, 100.0, &o->overlap_distance_m);
   return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");
 }
 

@@ -79,38 +79,57 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     for (int child : order.order) {
       const int parent = order.parent[child];
       if (parent < 0) continue;
+      const bool needs_loop = done.at({parent, child}).needs_loop;
       const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
-      if (!check_all && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
-      int best = -1, best_weight = source.min_check_weight - 1;
+      if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
+      // Check partners, best first: the best one only, or every one until a loop closes when the
+      // link needs one.
+      std::vector<std::pair<int, int>> partners;  // (-weight, scan)
       for (int q : order.order) {
         if (q == child || q == parent || order.parent[q] == child) continue;
         if (Contains(excluded, q, child)) continue;
         const int w = std::max(source.weights(q, child), source.weights(child, q));
-        if (w > best_weight) best = q, best_weight = w;
+        if (w >= source.min_check_weight) partners.emplace_back(-w, q);
       }
-      if (best < 0) continue;
-      // A check already made the other way round serves (inverted).
-      const auto reverse = done.find({child, best});
-      const bool use_reverse = reverse != done.end() && reverse->second.link.status != io::LinkStatus::kFailed;
-      const PairResult& check = use_reverse ? reverse->second : link(best, child);
-      if (check.link.status == io::LinkStatus::kFailed) continue;
-      const Eigen::Isometry3d best_from_child =
-          use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
-      if (!use_reverse) checked_with[child] = best;
-      const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
-      if (gap.position_m <= options.loop_tolerance_m && gap.angle_rad <= options.loop_tolerance_rad) continue;
-      char buf[200];
-      std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans[parent].name.c_str(),
-                    scans[child].name.c_str(), scans[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
-      LogWarning(std::string(buf) + "; both links failed");
-      fail_link(parent, child, buf);
-      if (use_reverse) {
-        fail_link(child, best, buf);
-      } else {
-        fail_link(best, child, buf);
+      std::stable_sort(partners.begin(), partners.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      if (!needs_loop && partners.size() > 1) partners.resize(1);
+      bool closed = false, open = false;
+      for (const auto& [neg_weight, best] : partners) {
+        // A check already made the other way round serves (inverted).
+        const auto reverse = done.find({child, best});
+        const bool use_reverse = reverse != done.end() && reverse->second.link.status != io::LinkStatus::kFailed;
+        const PairResult& check = use_reverse ? reverse->second : link(best, child);
+        if (check.link.status == io::LinkStatus::kFailed) continue;
+        const Eigen::Isometry3d best_from_child =
+            use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
+        if (!use_reverse) checked_with[child] = best;
+        const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
+        if (gap.position_m <= options.loop_tolerance_m && gap.angle_rad <= options.loop_tolerance_rad) {
+          closed = true;
+          break;
+        }
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans[parent].name.c_str(),
+                      scans[child].name.c_str(), scans[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
+        LogWarning(std::string(buf) + "; both links failed");
+        fail_link(parent, child, buf);
+        if (use_reverse) {
+          fail_link(child, best, buf);
+        } else {
+          fail_link(best, child, buf);
+        }
+        open = true;
+        break;
       }
-      changed = true;
-      break;
+      if (!closed && !open && needs_loop) {
+        const std::string& why = done.at({parent, child}).link.reason;
+        fail_link(parent, child, why.substr(0, why.find("; a loop")) + "; no loop through another scan confirms it");
+        open = true;
+      }
+      if (open) {
+        changed = true;
+        break;
+      }
     }
     if (!changed) break;
   }

@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/registration/point_index.h"
+#include "core/registration/data_scale.h"
 #include "core/registration/voxel_filter.h"
 
 namespace scanreg {
@@ -22,12 +22,6 @@ struct GeometricFeatures::DescriptorIndex {
 namespace {
 
 constexpr double kMaxLevelTiltRad = 3.0 * M_PI / 180.0;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Up from the normals: the direction most perpendicular to the walls (normals within 15° of
 // horizontal) and most parallel to the ground (within 15° of vertical), refined from z.
@@ -80,25 +74,8 @@ Status GeometricOptions::Validate() const {
 }
 
 double SuggestVoxel(const Scan& scan) {
-  std::vector<Eigen::Vector3d> pts = ThinEvenly(ValidPoints(scan), 20000);
-  if (pts.size() < 10) return 0.0;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& p : pts) c += p;
-  c /= double(pts.size());
-  std::vector<double> spread;
-  for (const auto& p : pts) spread.push_back((p - c).norm());
-  const double extent = Median(spread);
-  // Spacing of the full scan: nearest-neighbour distances among the thinned points shrink by the
-  // square root of the thinning on a surface.
-  const PointIndex index(pts);
-  std::vector<double> nn;
-  for (std::size_t i = 0; i < pts.size(); i += 10) {
-    const std::vector<int> k = index.KNearest(pts[i], 2);
-    if (k.size() == 2) nn.push_back((pts[k[1]] - pts[i]).norm());
-  }
-  const double thinning = double(scan.CountValid()) / double(pts.size());
-  const double spacing = Median(nn) / std::sqrt(std::max(1.0, thinning));
-  return std::max(3.0 * spacing, extent / 60.0);
+  const DataScale d = MeasureDataScale(scan);
+  return d.ok() ? std::max(3.0 * d.spacing_m, d.extent_m / 60.0) : 0.0;
 }
 
 Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
