@@ -8,6 +8,7 @@
 #include "app/cli_util.h"
 #include "core/geometry/transform.h"
 #include "core/io/project.h"
+#include "core/io/project_lock.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
@@ -145,6 +146,9 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
 }  // namespace
 
 int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json) {
+  // One writer at a time: a second register on this project refuses now, not after minutes of work.
+  Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register");
+  if (!lock) return Fail(lock.error());
   TerminalProgress progress;
   CancelToken cancel;
   auto loaded = pipeline::LoadProjectScans(project, progress, cancel);

@@ -304,11 +304,13 @@ bool MainWindow::RegisterProject() {
 }
 
 bool MainWindow::SaveProject(const QString& path) {
-  if (Status s = io::SaveProject(project_, path.toStdString()); !s) {
+  std::uint64_t digest = 0;
+  if (Status s = io::SaveProject(project_, path.toStdString(), &digest); !s) {
     ShowError(tr("Cannot save project"), QString::fromStdString(s.error().message));
     return false;
   }
   project_.file = std::filesystem::absolute(path.toStdString());
+  project_.disk_digest = digest;
   dirty_ = false;
   statusBar()->showMessage(tr("Saved %1").arg(path), 5000);
   return true;
@@ -531,7 +533,7 @@ bool MainWindow::NewProject(const QStringList& scan_files, const QString& projec
     project.file = std::filesystem::absolute(path);
     Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
     if (!scans) return Expected<std::any>(scans.error());
-    if (Status s = io::SaveProject(project, path); !s) return Expected<std::any>(s.error());
+    if (Status s = io::SaveProject(project, path, &project.disk_digest); !s) return Expected<std::any>(s.error());
     return Expected<std::any>(std::any(LoadedProject{std::move(project), std::move(*scans)}));
   });
 }

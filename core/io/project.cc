@@ -213,6 +213,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
   }
   Project project;
   project.file = fs::absolute(path);
+  project.disk_digest = Digest(*text);
   const fs::path base = project.file.parent_path();
   std::set<std::string> names;
   try {
@@ -281,8 +282,24 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
   return project;
 }
 
-Status SaveProject(const Project& project, const std::filesystem::path& path) {
+std::uint64_t Digest(const std::string& bytes) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+Status SaveProject(const Project& project, const std::filesystem::path& path, std::uint64_t* saved_digest) {
   namespace fs = std::filesystem;
+  std::error_code ec;
+  if (project.disk_digest != 0 && !project.file.empty() && fs::exists(path, ec) &&
+      fs::equivalent(path, project.file, ec)) {
+    Expected<std::string> now = ReadWholeFile(path);
+    if (now && Digest(*now) != project.disk_digest) {
+      return MakeError(ErrorCode::kFailed, "project '" + path.string() +
+                                               "' changed on disk since it was read (another run or an editor wrote "
+                                               "it); nothing was saved — open it again, or save under another name");
+    }
+  }
   const fs::path base = fs::absolute(path).parent_path();
   json scans = json::array();
   for (const ProjectScan& s : project.scans) {
@@ -318,10 +335,13 @@ Status SaveProject(const Project& project, const std::filesystem::path& path) {
     }
     j["confusion"] = json{{"scans", project.confusion_scans}, {"matches", std::move(rows)}};
   }
+  const std::string text = j.dump(2) + "\n";
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;
-  if (Status s = file.Write(j.dump(2) + "\n"); !s) return s;
-  return file.Commit();
+  if (Status s = file.Write(text); !s) return s;
+  if (Status s = file.Commit(); !s) return s;
+  if (saved_digest) *saved_digest = Digest(text);
+  return Status::Ok();
 }
 
 }  // namespace scanreg::io

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -81,6 +82,9 @@ struct Project {
   // its rows and columns; empty when the project has not been registered. Optional in the file.
   Eigen::MatrixXi confusion;
   std::vector<std::string> confusion_scans;
+  // A digest of the file's bytes as last read or saved (0: none): SaveProject onto the same file
+  // refuses when the file no longer has them — another run or an editor changed it meanwhile.
+  std::uint64_t disk_digest = 0;
 
   // Index of the scan with this name, or -1.
   int FindScan(const std::string& name) const;
@@ -94,7 +98,12 @@ struct Project {
 Expected<Project> LoadProject(const std::filesystem::path& path);
 
 // Writes the project atomically (temp, fsync, rename); scan paths are stored relative to the
-// project's folder. Does not touch the scan files.
-Status SaveProject(const Project& project, const std::filesystem::path& path);
+// project's folder. Does not touch the scan files. Onto project.file with a disk_digest: refuses
+// (nothing written) when the file changed since it was read. *saved_digest: the new file's digest
+// (keep it in project.disk_digest for the next save).
+Status SaveProject(const Project& project, const std::filesystem::path& path, std::uint64_t* saved_digest = nullptr);
+
+// FNV-1a, 64 bits, of the bytes.
+std::uint64_t Digest(const std::string& bytes);
 
 }  // namespace scanreg::io
