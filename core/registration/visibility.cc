@@ -79,7 +79,7 @@ bool AtDepthEdge(const Scan& scan, int r, int c, double jump) {
 // Indices of `other`'s valid points to test: every k-th row and column of an organized scan (so the
 // samples cover surfaces evenly in both directions) away from depth edges, evenly spaced indices
 // otherwise.
-std::vector<std::size_t> SampleIndices(const Scan& other, int max_samples, double edge_jump) {
+std::vector<std::size_t> SampleIndicesAll(const Scan& other, int max_samples, double edge_jump) {
   std::size_t valid = 0;
   for (std::size_t i = 0; i < other.size(); ++i) valid += other.valid[i] ? 1 : 0;
   const std::size_t wanted = static_cast<std::size_t>(std::max(max_samples, 1));
@@ -101,6 +101,23 @@ std::vector<std::size_t> SampleIndices(const Scan& other, int max_samples, doubl
       next += stride;
     }
   }
+  return out;
+}
+
+// Sample indices without the near field (FreeSpaceOptions::near_field_m).
+std::vector<std::size_t> SampleIndices(const Scan& other, const FreeSpaceOptions& options) {
+  std::vector<std::size_t> all = SampleIndicesAll(other, options.max_samples, options.margin_m);
+  if (all.empty()) return all;
+  std::vector<float> ranges;
+  ranges.reserve(all.size());
+  for (std::size_t i : all) ranges.push_back(other.points[i].norm());
+  std::vector<float> sorted = ranges;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double near = std::min(options.near_field_m, options.near_field_fraction * sorted[sorted.size() / 2]);
+  std::vector<std::size_t> out;
+  out.reserve(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k)
+    if (ranges[k] >= near) out.push_back(all[k]);
   return out;
 }
 
@@ -161,7 +178,7 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   FreeSpaceResult result;
   if (observer.angles.empty() || observer.rows < 3 || observer.cols < 3) return result;
   const GridProjector projector(observer);
-  const std::vector<std::size_t> samples = SampleIndices(other, options.max_samples, options.margin_m);
+  const std::vector<std::size_t> samples = SampleIndices(other, options);
   std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
   std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
 #pragma omp parallel for schedule(static)
