@@ -4,6 +4,7 @@
 #include <set>
 
 #include "core/common/log.h"
+#include "core/common/output_set.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
@@ -162,11 +163,13 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   io::Project project;
   const std::filesystem::path project_path = std::filesystem::absolute(dir / "project.scanreg.json");
   project.file = project_path;
+  OutputSet written;  // the scans and the project: a project without its scans is not left behind
   for (std::size_t i = 0; i < scans->size(); ++i) {
     const Scan& scan = (*scans)[i];
     const std::filesystem::path ptx = project_path.parent_path() / (scan.name + ".ptx");
     SubProgress sub(progress, 0.8 + 0.2 * i / scans->size(), 0.8 + 0.2 * (i + 1) / scans->size());
-    if (Status s = io::WritePtx(ptx, {scan}, sub, cancel); !s) return s.error();
+    written.Track(ptx);
+    if (Status s = io::WritePtx(ptx, {scan}, sub, cancel); !s) return written.Failed(s.error());
     io::ProjectScan ps;
     ps.name = scan.name;
     ps.path = ptx;
@@ -179,7 +182,9 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   project.settings["simulated.size"] =
       std::to_string(options.scanner.cols) + "x" + std::to_string(options.scanner.rows);
   project.settings["simulated.noise_m"] = std::to_string(options.scanner.range_noise_m);
-  if (Status s = io::SaveProject(project, project_path); !s) return s.error();
+  written.Track(project_path);
+  if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return written.Failed(s.error());
+  written.Complete();
   return project;
 }
 

@@ -5,6 +5,7 @@
 #include <map>
 
 #include "core/common/log.h"
+#include "core/common/output_set.h"
 #include "core/io/las_writer.h"
 #include "core/io/scan_file.h"
 #include "core/merge/mesh_io.h"
@@ -80,9 +81,10 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
   }
   std::map<fs::path, std::vector<Scan>> open_files;
   std::vector<ExportedScan> result;
+  OutputSet written;  // the clouds exported so far: removed if the export stops halfway
   const double n = static_cast<double>(project.scans.size());
   for (std::size_t i = 0; i < project.scans.size(); ++i) {
-    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "export cancelled");
+    if (cancel.IsCancelled()) return written.Failed(MakeError(ErrorCode::kCancelled, "export cancelled"));
     const io::ProjectScan& ps = project.scans[i];
     ExportedScan out{ps.name, {}, 0, {}};
     if (!ps.registered) {
@@ -94,13 +96,14 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
     auto file = open_files.find(ps.path);
     if (file == open_files.end()) {
       Expected<std::vector<Scan>> read = io::ReadScanFile(ps.path, read_progress, cancel);
-      if (!read) return read.error();
+      if (!read) return written.Failed(read.error());
       file = open_files.emplace(ps.path, std::move(*read)).first;
     }
     if (ps.index_in_file < 0 || ps.index_in_file >= static_cast<int>(file->second.size())) {
-      return MakeError(ErrorCode::kParseError, "scan '" + ps.name + "': file '" + ps.path.string() + "' holds " +
-                                                   std::to_string(file->second.size()) + " scan(s), not scan number " +
-                                                   std::to_string(ps.index_in_file + 1));
+      return written.Failed(MakeError(ErrorCode::kParseError, "scan '" + ps.name + "': file '" + ps.path.string() +
+                                                                  "' holds " + std::to_string(file->second.size()) +
+                                                                  " scan(s), not scan number " +
+                                                                  std::to_string(ps.index_in_file + 1)));
     }
     Scan scan = file->second[ps.index_in_file];
     if (last_use[ps.path] == i) open_files.erase(file);
@@ -110,19 +113,20 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
     out.file = options.dir / (ps.name + "." + options.format);
     for (const io::ProjectScan& input : project.scans) {
       if (fs::exists(out.file, ec) && fs::equivalent(out.file, input.path, ec)) {
-        return MakeError(ErrorCode::kInvalidArgument, "exporting '" + ps.name + "' would overwrite the input scan '" +
-                                                          input.path.string() + "'; choose another output folder");
+        return written.Failed(MakeError(ErrorCode::kInvalidArgument, "exporting '" + ps.name +
+                                                                         "' would overwrite the input scan '" +
+                                                                         input.path.string() + "'; choose another output folder"));
       }
     }
     out.points = scan.CountValid();
     SubProgress write_progress(progress, (i + 0.5) / n, (i + 1) / n);
-    if (options.format == "las") {
-      if (Status s = WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1)); !s) return s.error();
-    } else if (Status s = io::WriteScanFile(out.file, {scan}, write_progress, cancel); !s) {
-      return s.error();
-    }
+    written.Track(out.file);
+    const Status s = options.format == "las" ? WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1))
+                                             : io::WriteScanFile(out.file, {scan}, write_progress, cancel);
+    if (!s) return written.Failed(s.error());
     result.push_back(out);
   }
+  written.Complete();
   progress.Report(1.0, "clouds exported");
   return result;
 }

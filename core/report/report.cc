@@ -5,6 +5,7 @@
 #include <ctime>
 
 #include "core/common/atomic_file.h"
+#include "core/common/output_set.h"
 #include "core/geometry/pose_angles.h"
 #include "core/geometry/transform.h"
 #include "core/io/project_tree.h"
@@ -245,6 +246,9 @@ Expected<std::filesystem::path> WriteReport(const io::Project& project, const st
     return MakeError(ErrorCode::kIoError, "report: cannot create the folder '" + dir.string() + "': " + ec.message() +
                                               "; choose a folder you can write to");
   }
+  // The page and its pictures are one set: a failure halfway removes the new files.
+  OutputSet written;
+  for (const char* name : {kConfusionPng, kNetworkPng, kErrorsPng, "index.html"}) written.Track(dir / name);
   const std::string title = "Registration report — " + project.file.stem().stem().string();
   std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + Escape(title) +
                      "</title>\n" + kStyle + "</head>\n<body>\n<h1>" + Escape(title) + "</h1>\n";
@@ -252,7 +256,7 @@ Expected<std::filesystem::path> WriteReport(const io::Project& project, const st
   // Sections with pictures write their PNG beside the page; a failed write names the file.
   constexpr int kSteps = 4;
   for (int step = 0; step < kSteps; ++step) {
-    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "report cancelled");
+    if (cancel.IsCancelled()) return written.Failed(MakeError(ErrorCode::kCancelled, "report cancelled"));
     progress.Report(double(step) / kSteps, "report");
     Status status;
     switch (step) {
@@ -269,7 +273,7 @@ Expected<std::filesystem::path> WriteReport(const io::Project& project, const st
         html += ErrorsSection(project, dir, &status);
         break;
     }
-    if (!status) return MakeError(status.error().code, "report: " + status.error().message);
+    if (!status) return written.Failed(MakeError(status.error().code, "report: " + status.error().message));
   }
   html += "</body>\n</html>\n";
   const fs::path index = dir / "index.html";
@@ -277,7 +281,8 @@ Expected<std::filesystem::path> WriteReport(const io::Project& project, const st
   Status s = file.Open();
   if (s) s = file.Write(html);
   if (s) s = file.Commit();
-  if (!s) return MakeError(s.error().code, "report: " + s.error().message);
+  if (!s) return written.Failed(MakeError(s.error().code, "report: " + s.error().message));
+  written.Complete();
   progress.Report(1.0, "report");
   return index;
 }

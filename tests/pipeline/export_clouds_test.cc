@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "core/geometry/transform.h"
 #include "core/io/scan_file.h"
 #include "core/pipeline/create_project.h"
@@ -105,6 +107,37 @@ TEST(ExportClouds, RefusesToOverwriteInputsAndNeedsARegisteredScan) {
   EXPECT_NE(none.error().message.find("register"), std::string::npos) << none.error().message;
   options.format = "xyz";
   EXPECT_EQ(ExportClouds(project, options, progress, cancel).error().code, ErrorCode::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
+
+namespace scanreg::pipeline {
+namespace {
+
+// A set of clouds is complete or not there (issue 16, item 5): the second scan's file is damaged,
+// so the export stops there and removes the first cloud it wrote; a cloud that existed before stays.
+TEST(ExportClouds, AnExportThatStopsHalfwayRemovesTheCloudsItCreated) {
+  test::TempDir dir;
+  io::Project project = TrueProject(dir / "p");
+  ASSERT_EQ(project.scans.size(), 3u);
+  project.scans[2].registered = true;  // the far station, exported last
+  std::filesystem::resize_file(project.scans[2].path, 200);  // truncated: unreadable
+  ExportCloudsOptions options;
+  options.format = "ply";
+  options.dir = dir / "out";
+  std::filesystem::create_directories(options.dir);
+  const std::filesystem::path earlier = options.dir / (project.scans[1].name + ".ply");
+  std::ofstream(earlier) << "an earlier export";
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<ExportedScan>> r = ExportClouds(project, options, progress, cancel);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("removed the 1 new file(s)"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(project.scans[2].path.filename().string()), std::string::npos)
+      << "names the damaged scan file: " << r.error().message;
+  EXPECT_FALSE(std::filesystem::exists(options.dir / (project.scans[0].name + ".ply")));
+  EXPECT_TRUE(std::filesystem::exists(earlier)) << "a file that existed before is not deleted";
 }
 
 }  // namespace
