@@ -2,20 +2,6 @@
 // peak memory, the accuracy table against the simulator's truth, the method alternatives (coarse
 // EPnP / 3D, fine keypoints / dense) and PCL's own FPFH + SampleConsensusPrerejective + ICP on the
 // same tree pairs as the baseline.
-// GCC 12 reports a false -Warray-bounds inside Eigen's umeyama (SSE load of a Vector3f), inlined
-// from PCL's SVD transformation estimation; the headers are not ours.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Warray-bounds"
-#include <pcl/features/fpfh_omp.h>
-#include <pcl/features/normal_3d_omp.h>
-#include <pcl/filters/voxel_grid.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-#include <pcl/registration/icp.h>
-#include <pcl/registration/sample_consensus_prerejective.h>
-#include <pcl/search/kdtree.h>
-#pragma GCC diagnostic pop
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -32,6 +18,7 @@
 #include "core/pipeline/register_project.h"
 #include "core/simulate/project_sim.h"
 #include "tests/bench/bench_table.h"
+#include "tests/bench/pcl_baseline.h"
 
 namespace scanreg::bench {
 namespace {
@@ -102,134 +89,6 @@ Accuracy Summarize(const pipeline::ProjectRegistration& r, const std::vector<Sca
   }
   for (const io::LinkRecord* l : TreeLinks(r)) a.pair_seconds.push_back(l->seconds);
   return a;
-}
-
-// ---- PCL baseline -------------------------------------------------------------------------------
-
-// The brief's starting point was one 0.1 m cloud for everything (normals r 0.3, FPFH r 0.5, SAC
-// distance 0.25 m). At 3000 x 750 that cloud has ~10^5 points and PCL's prerejective RANSAC scores
-// every hypothesis that passes the polygon test on all of them (one k-d tree query per point): a
-// 1000 x 250 pair ran for minutes. The usual remedy (Open3D / PCL tutorials): the global stage on a
-// coarser cloud with radii scaled to it (normals 2x, FPFH 5x, distance 2.5x the voxel), ICP on the
-// fine cloud; points beyond 30 m dropped; 20000 iterations instead of 50000 to bound the time
-struct PclOptions {
-  double max_range_m = 30.0;     // points farther from the scanner are dropped (sparse, no stable normals)
-  double fine_voxel_m = 0.1;     // ICP cloud
-  double coarse_voxel_m = 0.4;   // FPFH / SAC cloud
-  double normal_radius_m = 0.8;
-  double fpfh_radius_m = 2.0;
-  int max_iterations = 20000;
-  int samples = 3;
-  int randomness = 5;
-  float similarity = 0.9f;
-  double sac_max_distance_m = 1.0;
-  float inlier_fraction = 0.25f;
-  double icp_max_distance_m = 0.2;
-  int icp_iterations = 50;
-};
-
-struct PclScan {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr fine{new pcl::PointCloud<pcl::PointXYZ>};
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud{new pcl::PointCloud<pcl::PointXYZ>};  // coarse, with features
-  pcl::PointCloud<pcl::FPFHSignature33>::Ptr features{new pcl::PointCloud<pcl::FPFHSignature33>};
-};
-
-pcl::PointCloud<pcl::PointXYZ>::Ptr Downsample(const pcl::PointCloud<pcl::PointXYZ>::Ptr& in, double voxel_m) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(in);
-  const float leaf = static_cast<float>(voxel_m);
-  grid.setLeafSize(leaf, leaf, leaf);
-  grid.filter(*down);
-  return down;
-}
-
-// Voxel grids (scanner frame): the fine cloud for ICP, the coarse one with normals and FPFH; points
-// whose normal could not be estimated are dropped (their histograms would be NaN).
-PclScan PclPrepare(const Scan& scan, const PclOptions& o) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr raw(new pcl::PointCloud<pcl::PointXYZ>);
-  raw->reserve(scan.CountValid());
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i] && scan.points[i].norm() <= o.max_range_m)
-      raw->push_back(pcl::PointXYZ(scan.points[i].x(), scan.points[i].y(), scan.points[i].z()));
-  PclScan out;
-  out.fine = Downsample(raw, o.fine_voxel_m);
-  pcl::PointCloud<pcl::PointXYZ>::Ptr down = Downsample(out.fine, o.coarse_voxel_m);
-
-  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
-  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
-  ne.setInputCloud(down);
-  ne.setSearchMethod(pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
-  ne.setRadiusSearch(o.normal_radius_m);
-  ne.setViewPoint(0, 0, 0);  // the scanner
-  ne.compute(*normals);
-
-  pcl::PointCloud<pcl::Normal>::Ptr good_normals(new pcl::PointCloud<pcl::Normal>);
-  for (std::size_t i = 0; i < down->size(); ++i) {
-    const pcl::Normal& n = (*normals)[i];
-    if (!std::isfinite(n.normal_x) || !std::isfinite(n.normal_y) || !std::isfinite(n.normal_z)) continue;
-    out.cloud->push_back((*down)[i]);
-    good_normals->push_back(n);
-  }
-  pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fpfh;
-  fpfh.setInputCloud(out.cloud);
-  fpfh.setInputNormals(good_normals);
-  fpfh.setSearchMethod(pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
-  fpfh.setRadiusSearch(o.fpfh_radius_m);
-  fpfh.compute(*out.features);
-  return out;
-}
-
-struct PclPairResult {
-  double seconds_features = 0, seconds_sac = 0, seconds_icp = 0;
-  bool converged = false;
-  Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
-  std::size_t parent_points = 0, child_points = 0, parent_coarse_points = 0, child_coarse_points = 0;
-};
-
-PclPairResult PclRegisterPair(const Scan& parent, const Scan& child, const PclOptions& o) {
-  PclPairResult r;
-  PclScan p, c;
-  r.seconds_features = Seconds([&] {
-    p = PclPrepare(parent, o);
-    c = PclPrepare(child, o);
-  });
-  r.parent_points = p.fine->size();
-  r.child_points = c.fine->size();
-  r.parent_coarse_points = p.cloud->size();
-  r.child_coarse_points = c.cloud->size();
-  Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
-  pcl::PointCloud<pcl::PointXYZ> aligned;
-  r.seconds_sac = Seconds([&] {
-    pcl::SampleConsensusPrerejective<pcl::PointXYZ, pcl::PointXYZ, pcl::FPFHSignature33> sac;
-    sac.setInputSource(c.cloud);
-    sac.setSourceFeatures(c.features);
-    sac.setInputTarget(p.cloud);
-    sac.setTargetFeatures(p.features);
-    sac.setMaximumIterations(o.max_iterations);
-    sac.setNumberOfSamples(o.samples);
-    sac.setCorrespondenceRandomness(o.randomness);
-    sac.setSimilarityThreshold(o.similarity);
-    sac.setMaxCorrespondenceDistance(o.sac_max_distance_m);
-    sac.setInlierFraction(o.inlier_fraction);
-    sac.align(aligned);
-    r.converged = sac.hasConverged();
-    guess = sac.getFinalTransformation();
-  });
-  r.seconds_icp = Seconds([&] {
-    pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
-    icp.setInputSource(c.fine);
-    icp.setInputTarget(p.fine);
-    icp.setMaxCorrespondenceDistance(o.icp_max_distance_m);
-    icp.setMaximumIterations(o.icp_iterations);
-    icp.align(aligned, guess);
-    // PCL's float matrix, re-orthonormalised in double: a float rotation's trace is only good to
-    // ~1e-7, which hides (or clamps to 0) angle errors below ~0.05 deg in ComparePoses.
-    const Eigen::Matrix4d m = icp.getFinalTransformation().cast<double>();
-    r.parent_from_child.linear() = Eigen::Quaterniond(Eigen::Matrix3d(m.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
-    r.parent_from_child.translation() = m.topRightCorner<3, 1>();
-  });
-  return r;
 }
 
 void AddCombinationRows(Table& table, const std::string& label, const Expected<pipeline::ProjectRegistration>& r,

@@ -44,5 +44,6 @@ void RunExportBench(Table& table, bool quick);
 void RunEmBench(Table& table, bool quick);
 void RunGlobalBench(Table& table, bool quick);
 void RunGeometricBench(Table& table, bool quick);
+void RunHardBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench
