@@ -2,12 +2,14 @@
 // time. `--quick` runs reduced sizes.
 #include <algorithm>
 #include <cstdio>
-#include <vector>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "tests/bench/bench_table.h"
+#include "tests/bench/pcl_baseline.h"
 
 namespace scanreg::bench {
 
@@ -30,6 +32,9 @@ double PeakMemoryMiB() {
 }  // namespace scanreg::bench
 
 int main(int argc, char** argv) {
+  // The K-4PCS baseline's child process (pcl_baseline.h).
+  if (argc == 6 && std::strcmp(argv[1], "--kfpcs-child") == 0)
+    return scanreg::bench::RunKfpcsChild(argv[2], argv[3], std::atof(argv[4]), std::atoi(argv[5]));
   using Section = void (*)(scanreg::bench::Table&, bool);
   const std::vector<std::pair<std::string, Section>> sections = {
       {"simulate", scanreg::bench::RunSimulateBench}, {"io", scanreg::bench::RunIoBench},

@@ -8,6 +8,7 @@
 #include <pcl/features/fpfh_omp.h>
 #include <pcl/features/normal_3d_omp.h>
 #include <pcl/filters/voxel_grid.h>
+#include <pcl/io/pcd_io.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/ia_kfpcs.h>
@@ -22,6 +23,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <string>
 
 #include "tests/bench/bench_table.h"
 
@@ -141,76 +146,98 @@ PclPairResult PclRegisterPair(const Scan& parent, const Scan& child, const PclOp
 
 namespace {
 
-PclPairResult KfpcsInProcess(const Scan& parent, const Scan& child, const PclOptions& o) {
-  PclPairResult r;
-  PclScan p, c;
-  Prepare(parent, child, o, &p, &c, &r);
-  Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
-  r.seconds_sac = Seconds([&] {
-    pcl::PointCloud<pcl::PointXYZ> aligned;
-    // K-4PCS works on keypoints (Theiler et al.: a few thousand); on the full coarse cloud its base
-    // matching ran for more than 5 minutes per pair whatever the time limit. Keypoints here: the
-    // coarse cloud thinned to a 2 m grid (1 m: still over 5 minutes on a 1000x250 pair).
-    const pcl::PointCloud<pcl::PointXYZ>::Ptr ck = Downsample(c.cloud, o.kfpcs_voxel_m);
-    const pcl::PointCloud<pcl::PointXYZ>::Ptr pk = Downsample(p.cloud, o.kfpcs_voxel_m);
-    pcl::registration::KFPCSInitialAlignment<pcl::PointXYZ, pcl::PointXYZ> kfpcs;
-    kfpcs.setInputSource(ck);
-    kfpcs.setInputTarget(pk);
-    kfpcs.setNumberOfThreads(2);
-    kfpcs.setDelta(static_cast<float>(0.5 * o.kfpcs_voxel_m), false);  // the keypoints' accuracy
-    kfpcs.setScoreThreshold(0.01f);
-    kfpcs.setApproxOverlap(0.5f);
-    kfpcs.setMaxComputationTime(30);
-    kfpcs.align(aligned);
-    r.converged = kfpcs.hasConverged();
-    guess = kfpcs.getFinalTransformation();
-  });
-  Icp(p, c, guess, o, &r);
-  return r;
-}
-
 }  // namespace
+
+int RunKfpcsChild(const char* target_pcd, const char* source_pcd, double delta_m, int max_seconds) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr target(new pcl::PointCloud<pcl::PointXYZ>);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr source(new pcl::PointCloud<pcl::PointXYZ>);
+  if (pcl::io::loadPCDFile(target_pcd, *target) != 0 || pcl::io::loadPCDFile(source_pcd, *source) != 0) return 1;
+  pcl::registration::KFPCSInitialAlignment<pcl::PointXYZ, pcl::PointXYZ> kfpcs;
+  kfpcs.setInputSource(source);
+  kfpcs.setInputTarget(target);
+  kfpcs.setNumberOfThreads(2);
+  kfpcs.setDelta(static_cast<float>(delta_m), false);
+  kfpcs.setScoreThreshold(0.01f);
+  kfpcs.setApproxOverlap(0.5f);
+  kfpcs.setMaxComputationTime(max_seconds);
+  pcl::PointCloud<pcl::PointXYZ> aligned;
+  kfpcs.align(aligned);
+  const Eigen::Matrix4f m = kfpcs.getFinalTransformation();
+  std::printf("%d", kfpcs.hasConverged() ? 1 : 0);
+  for (int k = 0; k < 16; ++k) std::printf(" %.9g", double(m(k / 4, k % 4)));
+  std::printf("\n");
+  return 0;
+}
 
 PclPairResult PclKfpcsPair(const Scan& parent, const Scan& child, const PclOptions& o, double timeout_s,
                            bool* timed_out) {
   *timed_out = false;
-  int fds[2];
-  if (::pipe(fds) != 0) return {};
-  const auto t0 = std::chrono::steady_clock::now();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::close(fds[0]);
-    const PclPairResult r = KfpcsInProcess(parent, child, o);
-    double out[20] = {r.converged ? 1.0 : 0.0, r.seconds_features, r.seconds_sac, r.seconds_icp};
-    const Eigen::Matrix4d m = r.parent_from_child.matrix();
-    for (int k = 0; k < 16; ++k) out[4 + k] = m(k / 4, k % 4);
-    const ssize_t written = ::write(fds[1], out, sizeof out);
-    ::_exit(written == static_cast<ssize_t>(sizeof out) ? 0 : 1);
-  }
-  ::close(fds[1]);
   PclPairResult r;
-  if (pid < 0) {
+  PclScan p, c;
+  Prepare(parent, child, o, &p, &c, &r);
+  // K-4PCS works on keypoints (Theiler et al.: a few thousand); on the full coarse cloud its base
+  // matching ran for more than 5 minutes per pair whatever the time limit. Keypoints here: the
+  // coarse cloud thinned to a 2 m grid. It runs in a fresh process (this program re-executed with
+  // --kfpcs-child): PCL ignores its own time limit, and a fork of a process that has used OpenMP
+  // deadlocks in libgomp (measured), so the child is exec'd, then killed after timeout_s.
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr ck = Downsample(c.cloud, o.kfpcs_voxel_m);
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr pk = Downsample(p.cloud, o.kfpcs_voxel_m);
+  char dir_template[] = "/tmp/scanreg-kfpcs-XXXXXX";
+  if (!::mkdtemp(dir_template)) return r;
+  const std::string dir = dir_template, target = dir + "/target.pcd", source = dir + "/source.pcd";
+  pcl::io::savePCDFileBinary(target, *pk);
+  pcl::io::savePCDFileBinary(source, *ck);
+  Eigen::Matrix4f guess = Eigen::Matrix4f::Identity();
+  r.seconds_sac = Seconds([&] {
+    int fds[2];
+    if (::pipe(fds) != 0) return;
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::dup2(fds[1], 1);
+      ::close(fds[0]);
+      ::close(fds[1]);
+      const std::string delta = std::to_string(0.5 * o.kfpcs_voxel_m);
+      const std::string seconds = std::to_string(static_cast<int>(timeout_s));
+      ::execl("/proc/self/exe", "scanreg-bench", "--kfpcs-child", target.c_str(), source.c_str(), delta.c_str(),
+              seconds.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ::close(fds[1]);
+    if (pid < 0) {
+      ::close(fds[0]);
+      return;
+    }
+    std::string text;
+    const auto t0 = std::chrono::steady_clock::now();
+    for (;;) {
+      const double left = timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      pollfd pfd{fds[0], POLLIN, 0};
+      if (left <= 0 || ::poll(&pfd, 1, static_cast<int>(1000 * left)) != 1) {
+        *timed_out = true;
+        break;
+      }
+      char buf[512];
+      const ssize_t got = ::read(fds[0], buf, sizeof buf);
+      if (got <= 0) break;
+      text.append(buf, static_cast<std::size_t>(got));
+    }
+    if (*timed_out) ::kill(pid, SIGKILL);
     ::close(fds[0]);
-    return r;
-  }
-  pollfd pfd{fds[0], POLLIN, 0};
-  double out[20];
-  if (::poll(&pfd, 1, static_cast<int>(1000 * timeout_s)) == 1 && ::read(fds[0], out, sizeof out) == sizeof out) {
-    r.converged = out[0] != 0.0;
-    r.seconds_features = out[1];
-    r.seconds_sac = out[2];
-    r.seconds_icp = out[3];
-    Eigen::Matrix4d m;
-    for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = out[4 + k];
-    r.parent_from_child.matrix() = m;
-  } else {
-    ::kill(pid, SIGKILL);
-    *timed_out = true;
-    r.seconds_sac = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  ::close(fds[0]);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    std::istringstream in(text);
+    int converged = 0;
+    Eigen::Matrix4f m;
+    if (!*timed_out && in >> converged) {
+      for (int k = 0; k < 16; ++k) in >> m(k / 4, k % 4);
+      if (in) {
+        r.converged = converged == 1;
+        guess = m;
+      }
+    }
+  });
+  std::filesystem::remove_all(dir);
+  Icp(p, c, guess, o, &r);
   return r;
 }
 

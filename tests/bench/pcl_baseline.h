@@ -42,11 +42,15 @@ struct PclPairResult {
 
 PclPairResult PclRegisterPair(const Scan& parent, const Scan& child, const PclOptions& o);
 
-// K-4PCS (Theiler et al. 2014, PCL's KFPCSInitialAlignment) on the coarse clouds, then the same ICP.
-// seconds_sac holds the K-4PCS time. PCL's K-4PCS does not keep its own time limit (measured: over 5
-// minutes on one 1000x250 street pair with a 30 s limit), so it runs in a child process that is
-// stopped after timeout_s: *timed_out is then true and the result not converged.
+// K-4PCS (Theiler et al. 2014, PCL's KFPCSInitialAlignment) on keypoints of the coarse clouds, then
+// the same ICP. seconds_sac holds the K-4PCS time. PCL's K-4PCS does not keep its own time limit
+// (measured: over 5 minutes on one 1000x250 street pair with a 30 s limit), so it runs in a child
+// process (this program re-executed, see RunKfpcsChild) stopped after timeout_s: *timed_out is then
+// true and the result not converged.
 PclPairResult PclKfpcsPair(const Scan& parent, const Scan& child, const PclOptions& o, double timeout_s,
                            bool* timed_out);
+
+// The child's side: K-4PCS of two PCD files, prints "converged m00 m01 ... m33" (source into target).
+int RunKfpcsChild(const char* target_pcd, const char* source_pcd, double delta_m, int max_seconds);
 
 }  // namespace scanreg::bench
