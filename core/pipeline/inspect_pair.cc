@@ -50,13 +50,11 @@ Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, cons
   PairInspection out;
   PreparedScan prepared[2];
   const Scan* scans[2] = {&parent, &child};
-  RegisterOptions prepare_options = options;
-  prepare_options.geometric.voxel_m = GeometricVoxel({&parent, &child}, options);
   for (int k = 0; k < 2; ++k) {
     if (cancel.IsCancelled()) return Cancelled();
     progress.Report(0.25 * k, "features of " + scans[k]->name);
     bool cached = false;
-    if (Status s = PrepareScanFeatures(*scans[k], prepare_options, &prepared[k], &cached, cancel); !s) return s.error();
+    if (Status s = PrepareScanFeatures(*scans[k], options, &prepared[k], &cached, cancel); !s) return s.error();
   }
   progress.Report(0.5, "matching " + child.name + " with " + parent.name);
   SubProgress match_progress(progress, 0.5, 0.6);

@@ -62,7 +62,7 @@ struct RegisterOptions {
   RegisterOptions();  // the sub-options' lengths unset (0)
   FeatureSources features = FeatureSources::kBoth;
   SiftOptions sift;
-  GeometricOptions geometric;  // voxel_m 0: the median of SuggestVoxel over the project's scans
+  GeometricOptions geometric;  // voxel_m 0: the median of SuggestVoxel over the project's scans (scale_defaults.h)
   MatchOptions match;              // ratio t_des = 0.66 (W)
   ReliabilityOptions reliability;  // t_std = 0.1 m (W)
   CoarseOptions coarse;            // method: kEpnp (W) or k3d

@@ -32,19 +32,6 @@ int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
 
 }  // namespace
 
-double GeometricVoxel(const std::vector<const Scan*>& scans, const RegisterOptions& options) {
-  if (!UsesGeometric(options.features) || options.geometric.voxel_m > 0.0 || scans.empty())
-    return options.geometric.voxel_m;
-  std::vector<double> voxels;
-  for (const Scan* s : scans) voxels.push_back(SuggestVoxel(*s));
-  std::nth_element(voxels.begin(), voxels.begin() + voxels.size() / 2, voxels.end());
-  const double voxel = voxels[voxels.size() / 2];
-  char buf[120];
-  std::snprintf(buf, sizeof buf, "geometric features: voxel %.4g m (from the scans' spacing and extent)", voxel);
-  LogInfo(buf);
-  return voxel;
-}
-
 Status PrepareScanFeatures(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared, bool* cached,
                            const CancelToken& cancel) {
   if (UsesSift(options.features)) {
@@ -151,13 +138,11 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
   std::vector<PreparedScan> prepared(n);
   auto t0 = std::chrono::steady_clock::now();
-  RegisterOptions prepare_options = options;
-  prepare_options.geometric.voxel_m = GeometricVoxel(all, options);
   for (int i = 0; i < n; ++i) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
     progress.Report(0.3 * i / n, "features of " + scans[i].name);
     bool cached = false;
-    if (Status st = PrepareScanFeatures(scans[i], prepare_options, &prepared[i], &cached, cancel); !st) return st.error();
+    if (Status st = PrepareScanFeatures(scans[i], options, &prepared[i], &cached, cancel); !st) return st.error();
     result.features_from_cache += cached;
   }
   result.seconds_features = Since(t0);

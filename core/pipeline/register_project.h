@@ -47,11 +47,9 @@ struct ProjectRegistration {
 
 // The matches of a pair in both directions (parent's features as query), without duplicates:
 // the ratio test is asymmetric, so the union holds more true correspondences than either side.
-// The voxel of the geometric features: options.geometric.voxel_m when set, else the median of
-// SuggestVoxel over the scans (logged).
-double GeometricVoxel(const std::vector<const Scan*>& scans, const RegisterOptions& options);
 
-// SIFT (or the feature cache) and FPFH as options.features asks (the geometric voxel resolved),
+// SIFT (or the feature cache) and FPFH as options.features asks (the geometric voxel resolved by
+// ResolveLengths, scale_defaults.h),
 // then PrepareScan. *cached: the SIFT features came from the cache.
 Status PrepareScanFeatures(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared, bool* cached,
                            const CancelToken& cancel);

@@ -6,6 +6,7 @@
 
 #include "core/common/log.h"
 #include "core/registration/data_scale.h"
+#include "core/registration/geometric_features.h"
 #include "core/registration/point_index.h"
 #include "core/registration/voxel_filter.h"
 
@@ -27,21 +28,23 @@ bool AnyUnset(const RegisterOptions& o) {
          o.thresholds.weak_rms_m == 0 || o.loop_tolerance_m == 0 || o.coarse.inlier_threshold_m == 0 ||
          o.coarse.ambiguity_distance_m == 0 || o.dense_icp.voxel_m == 0 ||
          o.dense_icp.max_correspondence_schedule_m.empty() || o.dense_icp.robust_scale_floor_m == 0 ||
-         o.keypoint_icp.max_correspondence_m == 0 || o.reliability.max_range_std_m == 0;
+         o.keypoint_icp.max_correspondence_m == 0 || o.reliability.max_range_std_m == 0 ||
+         (UsesGeometric(o.features) && o.geometric.voxel_m == 0);
 }
 
 }  // namespace
 
 ProjectScale MeasureProjectScale(const std::vector<const Scan*>& scans) {
-  std::vector<double> spacing, extent, noise;
+  std::vector<double> spacing, extent, noise, voxel;
   for (const Scan* s : scans) {
     const DataScale d = MeasureDataScale(*s);
     if (!d.ok()) continue;
     spacing.push_back(d.spacing_m);
     extent.push_back(d.extent_m);
+    voxel.push_back(SuggestVoxel(d));
     if (d.noise_m > 0) noise.push_back(d.noise_m);
   }
-  return {Median(spacing), Median(extent), Median(noise)};
+  return {Median(spacing), Median(extent), Median(noise), Median(voxel)};
 }
 
 double DataOverlapDistance(const ProjectScale& scale) {
@@ -85,7 +88,14 @@ Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::ve
                 scale.spacing_m, scale.extent_m, scale.noise_m, noise, o.range_sigma_m > 0 ? " (set)" : "", d,
                 o.overlap_distance_m > 0 ? " (set)" : "");
   LogInfo(buf);
-  return WithLengths(o, noise, d);
+  RegisterOptions out = WithLengths(o, noise, d);
+  if (UsesGeometric(o.features) && o.geometric.voxel_m == 0) {
+    out.geometric.voxel_m = scale.geometric_voxel_m;
+    std::snprintf(buf, sizeof buf, "geometric features: voxel %.4g m (from the scans' spacing and extent)",
+                  out.geometric.voxel_m);
+    LogInfo(buf);
+  }
+  return out;
 }
 
 double StartDistance(const std::vector<Scan>& scans, double d, double extent_m) {

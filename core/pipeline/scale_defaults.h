@@ -16,6 +16,7 @@ namespace scanreg::pipeline {
 // Medians over the scans of core/registration/data_scale.h.
 struct ProjectScale {
   double spacing_m = 0, extent_m = 0, noise_m = 0;
+  double geometric_voxel_m = 0;  // median over the scans of SuggestVoxel's rule (FPFH samples)
 };
 ProjectScale MeasureProjectScale(const std::vector<const Scan*>& scans);
 
@@ -30,8 +31,8 @@ double DataOverlapDistance(const ProjectScale& scale);
 // noise and d when set, else these.
 RegisterOptions WithLengths(RegisterOptions o, double noise_m, double overlap_distance_m);
 
-// o with every unset length resolved from the scans (measured only when something is unset;
-// the choices are logged). Errors when the scans give no scale (fewer than 20 valid points).
+// o with every unset length resolved from the scans, the geometric features' voxel too (each scan
+// measured once, only when something is unset; the choices are logged). Errors when the scans give no scale (fewer than 20 valid points).
 // *measured (optional): the scale, when it was measured.
 Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::vector<const Scan*>& scans,
                                          ProjectScale* measured = nullptr);

@@ -73,10 +73,9 @@ Status GeometricOptions::Validate() const {
   return Status::Ok();
 }
 
-double SuggestVoxel(const Scan& scan) {
-  const DataScale d = MeasureDataScale(scan);
-  return d.ok() ? std::max(3.0 * d.spacing_m, d.extent_m / 60.0) : 0.0;
-}
+double SuggestVoxel(const DataScale& d) { return d.ok() ? std::max(3.0 * d.spacing_m, d.extent_m / 60.0) : 0.0; }
+
+double SuggestVoxel(const Scan& scan) { return SuggestVoxel(MeasureDataScale(scan)); }
 
 Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
                                                     const CancelToken& cancel) {

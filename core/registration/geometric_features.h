@@ -12,6 +12,7 @@
 #include "core/common/expected.h"
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
+#include "core/registration/data_scale.h"
 
 namespace scanreg {
 
@@ -53,6 +54,8 @@ struct GeometricFeatures {
 // A voxel size for a scan: a few times its point spacing and a fraction of its extent (a 20 cm
 // object gets millimetres, a street tens of centimetres).
 double SuggestVoxel(const Scan& scan);
+// The same from an already measured scale.
+double SuggestVoxel(const DataScale& scale);
 
 Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
                                                     const CancelToken& cancel);
