@@ -186,6 +186,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
                         options, cancel);
   };
   source.min_check_weight = options.min_check_matches;
+  source.position_partners = 3;
   source.no_link_reason = "no link to a registered scan: no overlapping scan with enough feature matches";
   SubProgress pair_progress(progress, 0.5, 1.0);
   if (Status s = DriveRegistration(scans, *choices, source, options, pair_progress, cancel, &result); !s) {

@@ -20,6 +20,39 @@ bool Contains(const std::vector<std::pair<int, int>>& edges, int parent, int chi
 
 Error Cancelled() { return MakeError(ErrorCode::kCancelled, "registration cancelled"); }
 
+// The scans came with poses of their own (from their files or placed by hand) when no two share one;
+// projects read without poses have every scan at the identity.
+bool HavePriorPoses(const std::vector<Scan>& scans) {
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    for (std::size_t j = i + 1; j < scans.size(); ++j)
+      if (scans[i].world_from_scan.isApprox(scans[j].world_from_scan, 1e-9)) return false;
+  return scans.size() > 1;
+}
+
+// Partners by position (issue 11 item 4): the placed scans nearest to where an unplaced scan
+// probably stands — its own prior pose when the scans have priors, else beside its neighbours in
+// capture order (stations are set up one after the other) — nearest first, at most max_count.
+std::vector<int> PositionPartners(int x, const std::vector<Scan>& scans, const std::vector<bool>& placed,
+                                  const std::vector<Eigen::Isometry3d>& world, bool priors, int max_count) {
+  const int n = static_cast<int>(scans.size());
+  std::vector<Eigen::Vector3d> anchors;
+  if (priors) anchors.push_back(scans[x].world_from_scan.translation());
+  for (int q : {x - 1, x + 1})
+    if (q >= 0 && q < n && placed[q]) anchors.push_back(world[q].translation());
+  std::vector<std::pair<double, int>> by_distance;
+  for (int p = 0; p < n; ++p) {
+    if (!placed[p] || anchors.empty()) continue;
+    double d = INFINITY;
+    for (const Eigen::Vector3d& a : anchors) d = std::min(d, (world[p].translation() - a).norm());
+    by_distance.emplace_back(d, p);
+  }
+  std::sort(by_distance.begin(), by_distance.end());
+  std::vector<int> out;
+  for (const auto& [d, p] : by_distance)
+    if (static_cast<int>(out.size()) < max_count) out.push_back(p);
+  return out;
+}
+
 }  // namespace
 
 Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
@@ -53,9 +86,32 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
   ScanOrder order;
   std::vector<Eigen::Isometry3d> world(n, Eigen::Isometry3d::Identity());
   std::vector<int> checked_with(n, -1);
+  Eigen::MatrixXi weights = source.weights;
+  const bool priors = HavePriorPoses(scans);
+  std::vector<bool> position_tried(n, false);
+  // Once the tree has settled, each scan it leaves out gets its partners by position as edges of the
+  // lowest weights (they join only scans no link with matches placed); false when none is new.
+  auto add_position_partners = [&]() {
+    if (source.position_partners <= 0) return false;
+    std::vector<bool> placed(n, false);
+    for (int i = 0; i < n; ++i) placed[i] = i == order.root || order.parent[i] >= 0;
+    bool added = false;
+    for (int x = 0; x < n; ++x) {
+      if (placed[x] || position_tried[x] || choices.overrides[x]) continue;
+      position_tried[x] = true;
+      const std::vector<int> partners = PositionPartners(x, scans, placed, world, priors, source.position_partners);
+      for (std::size_t rank = 0; rank < partners.size(); ++rank) {
+        const int p = partners[rank];
+        if (Contains(excluded, p, x) || done.count({p, x}) || weights(p, x) >= source.min_weight) continue;
+        weights(p, x) = source.min_weight + static_cast<int>(partners.size() - 1 - rank);  // nearest first
+        LogInfo(scans[x].name + ": no link by matches; trying " + scans[p].name + " by position");
+        added = true;
+      }
+    }
+    return added;
+  };
   for (int round = 0; round < 4 * n * n; ++round) {
-    Expected<ScanOrder> o =
-        ComputeScanOrder(source.weights, choices.root, choices.overrides, excluded, source.min_weight);
+    Expected<ScanOrder> o = ComputeScanOrder(weights, choices.root, choices.overrides, excluded, source.min_weight);
     if (!o) return o.error();
     order = *o;
     bool changed = false;
@@ -72,7 +128,10 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     }
     if (cancel.IsCancelled()) return Cancelled();
     if (changed) continue;
-    if (!source.loop_checks || !options.verify_loops) break;
+    if (!source.loop_checks || !options.verify_loops) {
+      if (add_position_partners()) continue;
+      break;
+    }
     // Loop check (beyond W): register each scan also to its best other placed neighbour and compare
     // with the tree. Both links of a cycle that does not close are failed: a pairwise registration
     // can be self-consistent and wrong (repeated façades), a closed loop rarely is.
@@ -88,7 +147,7 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
       for (int q : order.order) {
         if (q == child || q == parent || order.parent[q] == child) continue;
         if (Contains(excluded, q, child)) continue;
-        const int w = std::max(source.weights(q, child), source.weights(child, q));
+        const int w = std::max(weights(q, child), weights(child, q));
         if (w >= source.min_check_weight) partners.emplace_back(-w, q);
       }
       std::stable_sort(partners.begin(), partners.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -131,7 +190,7 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         break;
       }
     }
-    if (!changed) break;
+    if (!changed && !add_position_partners()) break;
   }
 
   // Chain world poses from the root, which keeps its current pose (W §2 step 10).

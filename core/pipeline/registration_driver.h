@@ -40,6 +40,9 @@ struct LinkSource {
   // Whether pair results carry a coarse pose (W fig. 6 "after coarse"), and the reason given to a
   // scan no link reaches.
   bool has_coarse = true;
+  // Partners by position: a scan the weights leave unplaced is also tried against up to this many
+  // placed scans nearest to its prior pose or to its placed neighbours in capture order (0: none).
+  int position_partners = 0;
   std::string no_link_reason;
 };
 

@@ -1,0 +1,145 @@
+// The registration driver's scan order, on a project whose pair registrations are scripted from
+// known station poses: which pairs it tries and where it places each scan (issue 11 item 4:
+// partners by position for a scan no feature match reaches).
+#include "core/pipeline/registration_driver.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "core/geometry/transform.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+// Stations along a street, `spacing` apart, each turned differently; a pair registers (to the exact
+// relative pose) when its stations are at most `reach` apart, and fails otherwise.
+struct ScriptedProject {
+  std::vector<Scan> scans;
+  std::vector<Eigen::Isometry3d> truth;
+  double reach = 25.0;
+  std::set<int> unregistrable;            // scans every registration of which fails
+  std::set<std::pair<int, int>> tried;    // (parent, child) pairs the driver registered
+
+  ScriptedProject(const std::vector<double>& x_positions) {
+    for (std::size_t i = 0; i < x_positions.size(); ++i) {
+      Scan s;
+      s.name = "s" + std::to_string(i);
+      scans.push_back(s);
+      Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+      t.translation() = Eigen::Vector3d(x_positions[i], 0.3 * i, 0.1 * i);
+      t.linear() = Eigen::AngleAxisd(0.4 * i, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      truth.push_back(t);
+    }
+  }
+
+  PairResult Register(int parent, int child) {
+    tried.emplace(parent, child);
+    PairResult r;
+    r.link.parent = scans[parent].name;
+    r.link.child = scans[child].name;
+    const double distance = (truth[parent].translation() - truth[child].translation()).norm();
+    if (distance > reach || unregistrable.count(child) || unregistrable.count(parent)) {
+      r.link.status = io::LinkStatus::kFailed;
+      r.link.reason = "no overlap";
+      return r;
+    }
+    r.link.status = io::LinkStatus::kOk;
+    r.link.parent_from_child = truth[parent].inverse() * truth[child];
+    return r;
+  }
+
+  // Matches along the chain of the given pairs only; every other pair has none.
+  LinkSource Source(const std::vector<std::pair<int, int>>& matched, int position_partners) {
+    const int n = static_cast<int>(scans.size());
+    LinkSource source;
+    source.weights = Eigen::MatrixXi::Zero(n, n);
+    for (const auto& [a, b] : matched) source.weights(a, b) = source.weights(b, a) = 50;
+    source.register_pair = [this](int parent, int child) { return Register(parent, child); };
+    source.min_check_weight = 8;
+    source.position_partners = position_partners;
+    source.no_link_reason = "no link to a registered scan";
+    return source;
+  }
+
+  Expected<ProjectRegistration> Drive(const LinkSource& source) {
+    ScanOrderChoices choices;
+    choices.root = 0;
+    choices.overrides.assign(scans.size(), std::nullopt);
+    RegisterOptions options;
+    options.global = false;
+    options.loop_tolerance_m = 0.01;
+    NullProgress progress;
+    CancelToken cancel;
+    ProjectRegistration result;
+    if (Status s = DriveRegistration(scans, choices, source, options, progress, cancel, &result); !s) return s.error();
+    return result;
+  }
+
+  // Position error of scan i against the truth, in the frame of the root (which keeps its pose).
+  double Error(const ProjectRegistration& r, int i) const {
+    const Eigen::Isometry3d expected = r.scans[0].world_from_scan * truth[0].inverse() * truth[i];
+    return ComparePoses(r.scans[i].world_from_scan, expected).position_m;
+  }
+};
+
+TEST(RegistrationDriver, AScanWithoutMatchesIsTriedBesideItsNeighboursInCaptureOrder) {
+  // s2 shares no feature match with anyone; s1 and s3 (its neighbours in capture order) are placed.
+  ScriptedProject p({0, 10, 20, 30, 40});
+  Expected<ProjectRegistration> r = p.Drive(p.Source({{0, 1}, {1, 3}, {3, 4}}, 3));
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(r->scans[i].registered) << p.scans[i].name << ": " << r->scans[i].reason;
+    EXPECT_LT(p.Error(*r, i), 1e-9) << p.scans[i].name;
+  }
+  EXPECT_TRUE(r->scans[2].parent == 1 || r->scans[2].parent == 3) << r->scans[2].parent;
+
+  // The same project without partners by position leaves s2 out, untried.
+  ScriptedProject q({0, 10, 20, 30, 40});
+  Expected<ProjectRegistration> without = q.Drive(q.Source({{0, 1}, {1, 3}, {3, 4}}, 0));
+  ASSERT_TRUE(without.ok());
+  EXPECT_FALSE(without->scans[2].registered);
+  for (const auto& [parent, child] : q.tried) EXPECT_NE(child, 2);
+}
+
+TEST(RegistrationDriver, PriorPosesFindPartnersWhenCaptureOrderDoesNot) {
+  // s5, captured last, stands between s0 and s1; its capture neighbour s4 is 35 m away. With rough
+  // prior poses (1.5 m off, as from a GNSS receiver) it is tried beside s0/s1 and placed; without
+  // priors the scans beside s4 are all beyond reach and it stays out.
+  const std::vector<double> x = {0, 10, 20, 30, 40, 5};
+  const std::vector<std::pair<int, int>> chain = {{0, 1}, {1, 2}, {2, 3}, {3, 4}};
+  ScriptedProject p(x);
+  p.reach = 12.0;
+  for (std::size_t i = 0; i < p.scans.size(); ++i) {
+    p.scans[i].world_from_scan = p.truth[i];
+    p.scans[i].world_from_scan.translation() += Eigen::Vector3d(1.5, -1.0, 0.0);
+  }
+  Expected<ProjectRegistration> r = p.Drive(p.Source(chain, 3));
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  ASSERT_TRUE(r->scans[5].registered) << r->scans[5].reason;
+  EXPECT_LT(p.Error(*r, 5), 1e-9);
+
+  ScriptedProject q(x);
+  q.reach = 12.0;
+  Expected<ProjectRegistration> without = q.Drive(q.Source(chain, 3));
+  ASSERT_TRUE(without.ok());
+  EXPECT_FALSE(without->scans[5].registered);
+  EXPECT_TRUE(q.tried.count({4, 5})) << "the capture neighbour s4 was not tried";
+}
+
+TEST(RegistrationDriver, PositionPartnersAreBoundedAndTheirFailuresAreTheReason) {
+  ScriptedProject p({0, 10, 20, 30, 40, 50, 60});
+  p.unregistrable = {3};
+  Expected<ProjectRegistration> r = p.Drive(p.Source({{0, 1}, {1, 2}, {2, 4}, {4, 5}, {5, 6}}, 3));
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_FALSE(r->scans[3].registered);
+  int attempts = 0;
+  for (const auto& [parent, child] : p.tried) attempts += child == 3;
+  EXPECT_EQ(attempts, 3);
+  EXPECT_NE(r->scans[3].reason.find("failed: no overlap"), std::string::npos) << r->scans[3].reason;
+  for (int i : {0, 1, 2, 4, 5, 6}) EXPECT_TRUE(r->scans[i].registered) << p.scans[i].name;
+}
+
+}  // namespace
+}  // namespace scanreg::pipeline
