@@ -21,6 +21,7 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
+       {"max-memory", true, false, "GB       refuse a merge estimated above this (default: 3/4 of this machine's memory)"},
        {"keep-moving", false, false, "         keep points on moving objects (by default left out: no ghosts of traffic)"},
        {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"},
        {"points", true, false, "FILE.ply|FILE.las   also write the merged point cloud (the surface's vertices)"}},
@@ -44,6 +45,9 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto max_range = args->GetDouble("max-range", 0.0, 0.0, 1e6);
   if (!max_range) return Fail(max_range.error());
   options.max_range_m = *max_range;
+  auto max_memory = args->GetDouble("max-memory", 0.0, 0.0, 1e6);  // GB; 0 = the default budget
+  if (!max_memory) return Fail(max_memory.error());
+  options.memory_budget_bytes = static_cast<std::size_t>(*max_memory * 1e9);
   options.remove_small_pieces = !args->Has("keep-pieces");
   options.remove_moving = !args->Has("keep-moving");
   const std::string method = args->Get("method").value_or(merge::MergeMethodName(options.method));

@@ -12,6 +12,7 @@
 #include <QPushButton>
 #include <QSettings>
 #include <QSpinBox>
+#include <QTimer>
 #include <QVBoxLayout>
 
 #include "core/pipeline/merge_scans.h"
@@ -107,8 +108,18 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   summary_->setObjectName("MergeSummary");
   summary_->setWordWrap(true);
 
+  estimate_ = new QLabel(this);
+  estimate_->setObjectName("MergeEstimate");
+  estimate_->setWordWrap(true);
+  estimate_->setToolTip(tr("What the merge will take with these options, counted from the registered scans before "
+                           "it starts; a merge beyond three quarters of this computer's memory is refused."));
+  estimate_timer_ = new QTimer(this);
+  estimate_timer_->setSingleShot(true);
+  estimate_timer_->setInterval(300);  // after the user stops turning a spin box
+
   auto* layout = new QVBoxLayout(this);
   layout->addLayout(form);
+  layout->addWidget(estimate_);
   layout->addLayout(buttons);
   layout->addLayout(show);
   layout->addWidget(summary_);
@@ -133,12 +144,40 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(window_->jobs(), &JobRunner::Succeeded, this, &MergePanel::OnJobSucceeded);
   connect(window_->jobs(), &JobRunner::Started, this, &MergePanel::UpdateButtons);
   connect(window_->jobs(), &JobRunner::Failed, this, &MergePanel::UpdateButtons);
+  connect(estimate_timer_, &QTimer::timeout, this, &MergePanel::UpdateEstimate);
+  auto later = [this] { estimate_timer_->start(); };
+  connect(method_, qOverload<int>(&QComboBox::currentIndexChanged), this, later);
+  connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
+  connect(max_range_m_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
+  connect(keep_moving_, &QCheckBox::toggled, this, later);
+  connect(window_, &MainWindow::ProjectChanged, this, later);
   connect(window_, &MainWindow::PosesChanged, this, [this] {
+    estimate_timer_->start();
     if (!mesh_) return;
     ClearMesh();
     summary_->setText(tr("The registration changed: merge again for a mesh that matches it."));
   });
   UpdateButtons();
+}
+
+void MergePanel::UpdateEstimate() {
+  std::vector<const Scan*> scans;
+  for (std::size_t i = 0; i < window_->scans().size() && i < window_->project().scans.size(); ++i)
+    if (window_->project().scans[i].registered) scans.push_back(&window_->scans()[i]);
+  const merge::MergeOptions options = Options();
+  merge::MergeEstimate estimate;
+  if (scans.empty() || !options.Validate()) {
+    estimate_->clear();
+    return;
+  }
+  if (Status fits = merge::CheckMergeFits(scans, options, &estimate); !fits) {
+    estimate_->setText(QString::fromStdString(fits.error().message));
+    estimate_->setStyleSheet("color: #b00000;");
+    return;
+  }
+  estimate_->setStyleSheet(QString());
+  estimate_->setText(tr("Estimate for %n scan(s): ", "", int(scans.size())) +
+                     QString::fromStdString(estimate.Describe()));
 }
 
 merge::MergeOptions MergePanel::Options() const {

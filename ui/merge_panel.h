@@ -15,6 +15,7 @@ class QCheckBox;
 class QComboBox;
 class QDoubleSpinBox;
 class QLabel;
+class QTimer;
 class QPushButton;
 class QSpinBox;
 
@@ -46,6 +47,7 @@ class MergePanel : public QWidget {
   void ChooseExportFile();
   void SaveOptions() const;
   void UpdateButtons();
+  void UpdateEstimate();  // the estimate line, from the registered scans and the options
   void ShowError(const QString& title, const QString& message);
 
   MainWindow* window_;
@@ -62,6 +64,8 @@ class MergePanel : public QWidget {
   QPushButton* run_ = nullptr;
   QPushButton* export_ = nullptr;
   QLabel* summary_ = nullptr;
+  QLabel* estimate_ = nullptr;
+  QTimer* estimate_timer_ = nullptr;
 };
 
 }  // namespace scanreg::ui

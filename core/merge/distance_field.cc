@@ -194,6 +194,11 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   patches.BuildHash(CandidateRadius(options));
   SparseGrid grid(patches.origin, options.voxel_m);
   progress.Report(0.0, "allocating blocks");
+  {  // counted first: the blocks are allocated once, without a reallocation's double peak
+    BlockCounter counter(options.voxel_m, band, patches.points.size() * 27 + 1);
+    for (const Eigen::Vector3f& p : patches.points) counter.Add(p);
+    grid.Reserve(counter.count());
+  }
   for (std::size_t i = 0; i < patches.points.size(); ++i) {
     if ((i & 0xFFFFF) == 0 && cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
     grid.AllocateAround(patches.points[i], band);

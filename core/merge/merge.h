@@ -7,6 +7,7 @@
 #include "core/common/expected.h"
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
+#include "core/merge/merge_estimate.h"
 #include "core/merge/merge_options.h"
 #include "core/merge/mesh.h"
 
@@ -24,6 +25,7 @@ struct MergeResult {
   std::size_t moving_points = 0;     // points left out as moving objects (MergeOptions::remove_moving)
   std::vector<std::size_t> moving_per_scan;  // the same per merged scan, in their order
   double seconds = 0.0;
+  MergeEstimate estimate;            // what was expected before the merge (pipeline::MergeScans)
 };
 
 // All scans must be registered (world_from_scan set). Cancelled: kCancelled, no result.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 
 #include "core/common/expected.h"
 
@@ -35,7 +36,10 @@ struct MergeOptions {
   // Points of one scan in another scanner's free space (vehicles and people that moved between the
   // scans, stray returns) are left out, so the mesh has no ghosts (pipeline/moving_points.h).
   bool remove_moving = true;
-  double moving_margin_m = 0.0;  // metres nearer than the other scanner's surface; 0 = max(8 sigma, 2 voxels)
+  double moving_margin_m = 0.0;
+  // Bytes the merge may take (merge_estimate.h): a merge estimated above it is refused before it
+  // starts; 0 = three quarters of the machine's memory.
+  std::size_t memory_budget_bytes = 0;  // metres nearer than the other scanner's surface; 0 = max(8 sigma, 2 voxels)
   Status Validate() const;
 
   double MovingMargin() const { return moving_margin_m > 0.0 ? moving_margin_m : std::max(8.0 * sigma_m, 2.0 * voxel_m); }

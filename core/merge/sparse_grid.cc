@@ -3,14 +3,22 @@
 #include <cmath>
 
 namespace scanreg::merge {
+namespace {
+
+// The blocks holding a grid point within band_m of p: lo..hi on each axis.
+void BlockRange(const Eigen::Vector3f& p, double voxel_m, double band_m, int lo[3], int hi[3]) {
+  const double inv = 1.0 / voxel_m;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = FloorDiv(int(std::ceil((p[a] - band_m) * inv)), SparseGrid::kBlock);
+    hi[a] = FloorDiv(int(std::floor((p[a] + band_m) * inv)), SparseGrid::kBlock);
+  }
+}
+
+}  // namespace
 
 void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m) {
-  const double inv = 1.0 / voxel_;
   int lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = FloorDiv(int(std::ceil((p[a] - band_m) * inv)), kBlock);
-    hi[a] = FloorDiv(int(std::floor((p[a] + band_m) * inv)), kBlock);
-  }
+  BlockRange(p, voxel_, band_m, lo, hi);
   for (int z = lo[2]; z <= hi[2]; ++z) {
     for (int y = lo[1]; y <= hi[1]; ++y) {
       for (int x = lo[0]; x <= hi[0]; ++x) {
@@ -24,6 +32,23 @@ void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m) {
       }
     }
   }
+}
+
+bool BlockCounter::Add(const Eigen::Vector3f& p) {
+  if (capped()) return false;
+  int lo[3], hi[3];
+  BlockRange(p, voxel_, band_, lo, hi);
+  // Neighbouring points mostly touch the blocks of the one before: six comparisons, no look-up.
+  const BlockKey first{lo[0], lo[1], lo[2]}, last{hi[0], hi[1], hi[2]};
+  if (has_last_ && first == last_lo_ && last == last_hi_) return true;
+  last_lo_ = first, last_hi_ = last, has_last_ = true;
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        keys_.insert(BlockKey{x, y, z});
+        if (capped()) return false;
+      }
+  return true;
 }
 
 std::size_t SparseGrid::MemoryBytes() const {

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace scanreg::merge {
@@ -40,6 +41,8 @@ class SparseGrid {
   // Allocates (unknown) every block holding a grid point within band_m of p (p relative to origin).
   void AllocateAround(const Eigen::Vector3f& p, double band_m);
   std::size_t num_blocks() const { return blocks_.size(); }
+  // Room for this many blocks before AllocateAround adds them (no reallocation peak on the way).
+  void Reserve(std::size_t blocks) { blocks_.reserve(blocks), index_.reserve(blocks); }
   Block& block(std::size_t i) { return blocks_[i]; }
   const Block& block(std::size_t i) const { return blocks_[i]; }
   std::size_t MemoryBytes() const;
@@ -62,6 +65,25 @@ class SparseGrid {
 };
 
 inline int FloorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Counts the blocks SparseGrid::AllocateAround would allocate for a set of points, with a key set
+// instead of the blocks (~1/60 of their memory), stopping at `cap`: what a merge will need, known
+// before it allocates anything.
+class BlockCounter {
+ public:
+  BlockCounter(double voxel_m, double band_m, std::size_t cap) : voxel_(voxel_m), band_(band_m), cap_(cap) {}
+  // p relative to the grid's origin; false once the count has reached the cap.
+  bool Add(const Eigen::Vector3f& p);
+  std::size_t count() const { return keys_.size(); }
+  bool capped() const { return keys_.size() >= cap_; }
+
+ private:
+  double voxel_, band_;
+  std::size_t cap_;
+  BlockKey last_lo_, last_hi_;  // the blocks of the previous point
+  bool has_last_ = false;
+  std::unordered_set<BlockKey, BlockKeyHash> keys_;
+};
 
 // Flips the sign of grid points at least one voxel from the zero level whose known 26 neighbours
 // mostly (>= 2/3) have the other sign: isolated sign errors far from the surface would otherwise

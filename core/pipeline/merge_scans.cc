@@ -1,6 +1,7 @@
 #include "core/pipeline/merge_scans.h"
 
 #include "core/io/las_writer.h"
+#include "core/common/log.h"
 #include "core/io/text_parse.h"
 #include "core/pipeline/moving_points.h"
 
@@ -25,6 +26,10 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
                      scans.empty() ? "merge: the project has no scan"
                                    : "merge: no registered scan to merge (register the project first)");
   }
+  // Refused before any work when it would not fit in memory (issue 16); the estimate is logged.
+  MergeEstimate estimate;
+  if (Status fits = merge::CheckMergeFits(selected, options, &estimate); !fits) return fits.error();
+  LogInfo("merge of " + std::to_string(selected.size()) + " scans: " + estimate.Describe());
   // Points left out: beyond the maximum range, and on moving objects (seen through by another scan).
   std::vector<std::vector<std::uint8_t>> moving;
   if (options.remove_moving && selected.size() > 1) {
@@ -56,6 +61,7 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
   Expected<MergeResult> result = merge::MergeScanSet(selected, options, progress, cancel);
   if (result.ok()) {
     result->moving_per_scan = moving_per_scan;
+    result->estimate = estimate;
     for (std::size_t n : moving_per_scan) result->moving_points += n;
   }
   return result;

@@ -14,6 +14,7 @@
 
 namespace scanreg::pipeline {
 
+using merge::MergeEstimate;
 using merge::MergeMethod;
 using merge::MergeOptions;
 using merge::MergeResult;
@@ -21,7 +22,8 @@ using merge::Mesh;
 
 // Merges scans[i] where use[i] (all scans when `use` is empty); their world_from_scan must be the
 // registered poses. Errors: bad options (naming the option), no scan selected, no valid point
-// (naming the scans), cancelled (kCancelled; nothing is written anywhere).
+// (naming the scans), a merge estimated beyond options.memory_budget_bytes (with the voxel that
+// fits; merge_estimate.h), cancelled (kCancelled; nothing is written anywhere).
 Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel);
 

@@ -281,6 +281,11 @@ void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
                    std::to_string(result->blocks) + " blocks"});
     table.Add({"merge", what + ": peak memory", peak, "MiB",
                Fmt("field %.0f MiB; the simulated scans in memory included", result->field_bytes / 1048576.0)});
+    // What the merge expected before it started (the estimate that refuses what does not fit).
+    const merge::MergeEstimate& e = result->estimate;
+    table.Add({"merge", what + ": estimate", e.bytes / 1048576.0, "MiB",
+               Fmt("%.0f s expected (measured above); ", e.seconds) + std::to_string(e.blocks) + " blocks counted, " +
+                   std::to_string(result->blocks) + " allocated"});
   }
 }
 

@@ -16,6 +16,7 @@
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QMenu>
+#include <QLabel>
 #include <QMessageBox>
 #include <QSettings>
 #include <QSignalSpy>
@@ -153,6 +154,34 @@ class MergeProjectTest : public QObject {
     QCOMPARE(shown.smooth_iterations, defaults.smooth_iterations);
     QCOMPARE(shown.max_range_m, defaults.max_range_m);
     QCOMPARE(shown.remove_small_pieces, defaults.remove_small_pieces);
+  }
+
+  void MergePanelShowsWhatTheMergeWillTakeBeforeItStarts() {
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(registered_));
+    QVERIFY(WaitForJob(window, 120000));
+    auto* estimate = window.findChild<QLabel*>("MergeEstimate");
+    QVERIFY(estimate != nullptr);
+    // The blocks the estimate counts, read from its line: "... (N blocks of 8^3 voxels)".
+    auto blocks = [&] {
+      const QString text = estimate->text();
+      const int close = text.lastIndexOf(" blocks");
+      const int open = text.lastIndexOf('(', close);
+      return text.mid(open + 1, close - open - 1).remove('~').toLongLong();
+    };
+    scanreg::merge::MergeOptions options = QuickMerge();
+    window.mergePanel()->SetOptions(options);
+    QTRY_VERIFY_WITH_TIMEOUT(estimate->text().contains("about"), 5000);
+    const long long coarse = blocks();
+    QVERIFY2(coarse > 0, qPrintable(estimate->text()));
+    options.voxel_m /= 2;  // about four times the blocks on a surface
+    window.mergePanel()->SetOptions(options);
+    QTRY_VERIFY_WITH_TIMEOUT(blocks() != coarse, 5000);
+    QVERIFY2(blocks() > 2.5 * coarse && blocks() < 6 * coarse,
+             qPrintable(QString("%1 then %2 blocks").arg(coarse).arg(blocks())));
+    QVERIFY(window.mergePanel()->Run());
+    QVERIFY(WaitForJob(window, 300000));
   }
 
   void MergeThenExportPlyObjStlAndReadBack() {

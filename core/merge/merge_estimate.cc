@@ -1,0 +1,146 @@
+#include "core/merge/merge_estimate.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+#include "core/merge/sparse_grid.h"
+
+namespace scanreg::merge {
+namespace {
+
+// Measured on simulated streets and the demo (scanreg-bench --section merge prints estimate and
+// measurement side by side): patch points per field block after the range images' thinning, bytes
+// per patch point (point, two triangles, hash), mesh bytes per block, seconds per block and thread.
+constexpr double kPatchPointsPerBlock = 160.0;
+constexpr double kBytesPerPatchPoint = 80.0;
+constexpr double kMeshBytesPerBlock = 2400.0;
+constexpr double kSecondsPerBlockMl = 3e-3;
+constexpr double kSecondsPerBlockTsdf = 1.1e-3;
+constexpr double kBytesPerCellCopy = 17.0;  // a scan's copy with the left-out points marked
+
+struct Count {
+  std::size_t points = 0, cells = 0, blocks = 0;
+  bool capped = false;
+};
+
+Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel, std::size_t cap) {
+  Count c;
+  if (scans.empty()) return c;
+  const Eigen::Vector3d origin = scans.front()->world_from_scan.translation();
+  BlockCounter counter(voxel, options.band_m > 0.0 ? options.band_m : 3.0 * voxel, cap);
+  const double max2 = options.max_range_m > 0.0 ? options.max_range_m * options.max_range_m : INFINITY;
+  for (const Scan* s : scans) {
+    c.cells += s->size();
+    const Eigen::Isometry3d to_grid = Eigen::Translation3d(-origin) * s->world_from_scan;
+    for (std::size_t i = 0; i < s->size(); ++i) {
+      if (!s->valid[i] || s->points[i].squaredNorm() > max2) continue;
+      ++c.points;
+      if (!c.capped && !counter.Add((to_grid * s->points[i].cast<double>()).cast<float>())) c.capped = true;
+    }
+  }
+  c.blocks = counter.count();
+  return c;
+}
+
+MergeEstimate Estimate(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel,
+                       std::size_t cap) {
+  MergeEstimate e;
+  Count c = CountBlocks(scans, options, voxel, cap);
+  e.points = c.points;
+  e.blocks = c.blocks;
+  // Past the cap: count at coarser voxels until the count fits, once more at twice that voxel, and
+  // extrapolate with the exponent the two counts show (2 for a bare surface; less, as the band's
+  // blocks do not shrink with the surface's square).
+  double coarse = voxel;
+  while (c.capped && coarse < 1e4) {
+    coarse *= 2.0;
+    c = CountBlocks(scans, options, coarse, cap);
+    e.extrapolated = true;
+  }
+  if (e.extrapolated) {
+    const Count coarser = CountBlocks(scans, options, 2.0 * coarse, cap);
+    const double k = coarser.blocks > 0 ? std::clamp(std::log2(double(c.blocks) / double(coarser.blocks)), 1.0, 3.0) : 2.0;
+    e.blocks = static_cast<std::size_t>(std::min(1e18, double(c.blocks) * std::pow(coarse / voxel, k)));
+  }
+  const double blocks = double(e.blocks);
+  const double patch_points = std::min(double(e.points), kPatchPointsPerBlock * blocks);
+  const bool copies = options.remove_moving || options.max_range_m > 0.0;
+  const double bytes = blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
+                       blocks * kMeshBytesPerBlock + (copies ? double(c.cells) * kBytesPerCellCopy : 0.0);
+  e.bytes = static_cast<std::size_t>(std::min(bytes, 1e18));
+  const double threads = std::max(1u, std::thread::hardware_concurrency());
+  const double per_block = options.method == MergeMethod::kTsdf ? kSecondsPerBlockTsdf : kSecondsPerBlockMl;
+  e.seconds = blocks * per_block / threads;
+  return e;
+}
+
+std::string Bytes(double b) {
+  char buf[32];
+  if (b >= 1e9) std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
+  else std::snprintf(buf, sizeof buf, "%.0f MB", std::max(1.0, b / 1e6));
+  return buf;
+}
+
+std::string Duration(double s) {
+  char buf[32];
+  if (s < 90) std::snprintf(buf, sizeof buf, "%.0f s", std::max(1.0, s));
+  else if (s < 5400) std::snprintf(buf, sizeof buf, "%.0f min", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
+  return buf;
+}
+
+}  // namespace
+
+std::string MergeEstimate::Describe() const {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "about %s and %s (%s%zu blocks of 8^3 voxels)", Bytes(double(bytes)).c_str(),
+                Duration(seconds).c_str(), extrapolated ? "~" : "", blocks);
+  return buf;
+}
+
+MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,
+                            std::size_t cap_blocks) {
+  return Estimate(scans, options, options.voxel_m, cap_blocks);
+}
+
+std::size_t DefaultMemoryBudget() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return std::size_t(4) << 30;
+  return static_cast<std::size_t>(0.75 * double(pages) * double(page));
+}
+
+Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate) {
+  const std::size_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes : DefaultMemoryBudget();
+  // The cap keeps the count's own key set small (~50 bytes a key) and quick: past it the count is
+  // extrapolated from a coarser voxel (which errs on the large side: the band does not shrink with
+  // the surface's square).
+  const std::size_t cap = std::clamp<std::size_t>(budget / sizeof(SparseGrid::Block) + 1, 1000, 500'000);
+  *estimate = Estimate(scans, options, options.voxel_m, cap);
+  if (estimate->bytes <= budget) return Status::Ok();
+  // The smallest voxel that fits: blocks shrink with the voxel's square on surfaces; a few steps.
+  double voxel = options.voxel_m;
+  MergeEstimate fit = *estimate;
+  for (int i = 0; i < 8 && fit.bytes > budget; ++i) {
+    voxel *= std::max(1.05, std::sqrt(double(fit.bytes) / (0.9 * double(budget))));
+    fit = Estimate(scans, options, voxel, cap);
+  }
+  char voxels[80];
+  std::snprintf(voxels, sizeof voxels, "merge: at a voxel of %.4g m the merge needs ", options.voxel_m);
+  std::string what = voxels + estimate->Describe() + ", more than the memory budget of " + Bytes(double(budget)) +
+                     " (--max-memory GB sets it; the default is 3/4 of this machine's memory). ";
+  if (fit.bytes <= budget) {
+    // Two significant digits, rounded up (a smaller voxel needs more memory).
+    const double unit = std::pow(10.0, std::floor(std::log10(voxel)) - 1.0);
+    std::snprintf(voxels, sizeof voxels, "A voxel of %.2g m fits (", std::ceil(voxel / unit - 1e-9) * unit);
+    what += voxels + fit.Describe() + "); or merge fewer scans, or set --max-range.";
+  } else {
+    what += "Merge fewer scans, or set --max-range.";
+  }
+  return MakeError(ErrorCode::kInvalidArgument, what);
+}
+
+}  // namespace scanreg::merge
