@@ -9,7 +9,7 @@
 namespace scanreg::cli {
 
 int Fail(const Error& error) {
-  std::fprintf(stderr, "scanreg-cli: %s\n", io::EscapeControlBytes(error.message).c_str());
+  std::fprintf(stderr, "scanreg-cli: %s\n", EscapeControlBytes(error.message).c_str());
   switch (error.code) {
     case ErrorCode::kInvalidArgument:
       return 2;

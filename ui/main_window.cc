@@ -15,9 +15,11 @@
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
+#include <QTimer>
 #include <QUndoStack>
 
 #include "core/common/log.h"
+#include "core/io/project_lock.h"
 #include "core/io/project_tree.h"
 #include "core/io/scan_file.h"
 #include "core/pipeline/create_project.h"
@@ -203,14 +205,15 @@ void MainWindow::CreateMenus() {
     RememberDir(files.first());
     AddScans(files);
   });
-  QAction* save = file->addAction(tr("&Save project"), this,
-                                  [this] { SaveProject(QString::fromStdString(project_.file.string())); });
-  save->setShortcut(QKeySequence::Save);
-  QAction* save_as = file->addAction(tr("Save project &as…"), this, [this] {
-    const QString path =
-        QFileDialog::getSaveFileName(this, tr("Save project as"), QString(), tr("scanreg projects (*.scanreg.json)"));
-    if (!path.isEmpty()) SaveProject(path);
+  QAction* save = file->addAction(tr("&Save project"), this, [this] {
+    if (project_.file.empty()) {
+      SaveProjectAs();
+    } else {
+      SaveProject(QString::fromStdString(project_.file.string()));
+    }
   });
+  save->setShortcut(QKeySequence::Save);
+  QAction* save_as = file->addAction(tr("Save project &as…"), this, &MainWindow::SaveProjectAs);
   QAction* report = file->addAction(tr("Export &report…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(this, tr("Export report into folder"), LastDir());
     if (dir.isEmpty()) return;
@@ -303,10 +306,30 @@ bool MainWindow::RegisterProject() {
   });
 }
 
+void MainWindow::SaveProjectAs() {
+  QString path = QFileDialog::getSaveFileName(this, tr("Save project as"), LastDir(),
+                                              tr("scanreg projects (*.scanreg.json)"));
+  if (path.isEmpty()) return;
+  // Open lists *.scanreg.json: a project saved under another name would be hidden from it.
+  if (!path.endsWith(".scanreg.json")) path += path.endsWith(".json") ? QString() : QStringLiteral(".scanreg.json");
+  RememberDir(path);
+  SaveProject(path);
+}
+
 bool MainWindow::SaveProject(const QString& path) {
+  // One writer per project (issue 16): a `scanreg-cli register` running on it holds its lock.
+  Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(path.toStdString(), "scanreg (saving from the GUI)");
+  if (!lock) {
+    ShowError(tr("Cannot save project"), QString::fromStdString(lock.error().message));
+    return false;
+  }
   std::uint64_t digest = 0;
   if (Status s = io::SaveProject(project_, path.toStdString(), &digest); !s) {
-    ShowError(tr("Cannot save project"), QString::fromStdString(s.error().message));
+    if (s.error().code == ErrorCode::kConflict) {
+      OfferReload(path, QString::fromStdString(s.error().message));
+    } else {
+      ShowError(tr("Cannot save project"), QString::fromStdString(s.error().message));
+    }
     return false;
   }
   project_.file = std::filesystem::absolute(path.toStdString());
@@ -486,6 +509,30 @@ void MainWindow::Refresh() {
   scene_->ShowScans(shown, scans_);
   setWindowTitle(tr("scanreg — %1").arg(QString::fromStdString(project_.file.filename().string())));
   emit ProjectChanged();
+}
+
+void MainWindow::OfferReload(const QString& path, const QString& message) {
+  LogWarning(message.toStdString());
+  auto* box = new QMessageBox(QMessageBox::Warning, tr("The project changed on disk"),
+                              message + tr("\n\nReload it (your unsaved changes are lost), save your version under "
+                                           "another name, or cancel and decide later."),
+                              QMessageBox::NoButton, this);
+  box->setAttribute(Qt::WA_DeleteOnClose);
+  box->setObjectName("ConflictDialog");
+  QPushButton* reload = box->addButton(tr("Reload from disk"), QMessageBox::DestructiveRole);
+  reload->setObjectName("ReloadButton");
+  QPushButton* save_as = box->addButton(tr("Save as…"), QMessageBox::AcceptRole);
+  save_as->setObjectName("SaveAsButton");
+  box->addButton(QMessageBox::Cancel);
+  connect(box, &QMessageBox::buttonClicked, this, [this, reload, save_as, path](QAbstractButton* clicked) {
+    if (clicked == reload) {
+      dirty_ = false;  // the user chose to drop them
+      OpenProject(path);
+    } else if (clicked == save_as) {
+      QTimer::singleShot(0, this, &MainWindow::SaveProjectAs);
+    }
+  });
+  box->open();
 }
 
 void MainWindow::ShowError(const QString& title, const QString& message) {

@@ -44,7 +44,10 @@ class MainWindow : public QMainWindow {
   bool OpenProject(const QString& path);
   bool OpenDemoProject(const QString& dir);  // simulates a small street project into dir
   bool RegisterProject();
-  bool SaveProject(const QString& path);  // synchronous, atomic
+  // Synchronous and atomic, under the project's lock; a project changed on disk since it was read
+  // is not overwritten: a dialog offers to reload it or save under another name.
+  bool SaveProject(const QString& path);
+  void SaveProjectAs();  // asks for the file; adds .scanreg.json when the name has no .json
   // The options of the project's registration (also the pair panel's starting point).
   pipeline::RegisterOptions RegistrationOptions() const;
   // The options stored in the project's settings as an undoable edit (false when nothing changed).
@@ -66,6 +69,7 @@ class MainWindow : public QMainWindow {
   bool MaybeSaveChanges();
   // A dialog naming the problem and the next step (window-modal, does not block); also logged.
   void ShowError(const QString& title, const QString& message);
+  void OfferReload(const QString& path, const QString& message);
 
   // The user's edits, undoable. A parent override re-runs the registration when no job runs.
   void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <variant>
 
@@ -15,9 +16,14 @@ enum class ErrorCode {
   kUnsupported,      // valid input we do not handle (yet)
   kCancelled,        // the user cancelled the job
   kFailed,           // an algorithm ran but its evidence is too weak
+  kConflict,         // another run holds the file, or it changed on disk since it was read
 };
 
 const char* ErrorCodeName(ErrorCode code);
+
+// Bytes below 0x20 and 0x7f as \xNN, so that a message quoting a file never drives the terminal
+// and stays one line.
+std::string EscapeControlBytes(std::string_view text);
 
 struct Error {
   ErrorCode code = ErrorCode::kFailed;
@@ -26,7 +32,8 @@ struct Error {
   std::string ToString() const { return std::string(ErrorCodeName(code)) + ": " + message; }
 };
 
-inline Error MakeError(ErrorCode code, std::string message) { return Error{code, std::move(message)}; }
+// Every error is one printable line, whatever file content it quotes.
+inline Error MakeError(ErrorCode code, const std::string& message) { return Error{code, EscapeControlBytes(message)}; }
 
 // A value or an error. Minimal C++17 stand-in for std::expected.
 template <typename T>

@@ -1,5 +1,7 @@
 #include "core/common/log.h"
 
+#include "core/common/expected.h"
+
 #include <cstdio>
 #include <mutex>
 
@@ -34,11 +36,12 @@ void SetLogHandler(LogHandler handler) {
 }
 
 void Log(LogLevel level, const std::string& message) {
+  const std::string line = EscapeControlBytes(message);  // one printable line, whatever it quotes
   std::lock_guard<std::mutex> lock(LogMutex());
   if (Handler()) {
-    Handler()(level, message);
+    Handler()(level, line);
   } else if (level >= LogLevel::kInfo) {
-    std::fprintf(stderr, "[%s] %s\n", LevelName(level), message.c_str());
+    std::fprintf(stderr, "[%s] %s\n", LevelName(level), line.c_str());
   }
 }
 

@@ -118,37 +118,6 @@ std::string Serialize(const ScanFeatures& f, std::uint64_t key) {
   return out;
 }
 
-// Parses an entry; on failure returns an error saying what is wrong (for the warning).
-Expected<ScanFeatures> Deserialize(const std::string& in, std::uint64_t key, const Scan& scan) {
-  auto bad = [](const std::string& why) { return MakeError(ErrorCode::kParseError, why); };
-  if (in.size() < kHeaderBytes + 8) return bad("truncated header (" + std::to_string(in.size()) + " bytes)");
-  if (std::memcmp(in.data(), kMagic, 8) != 0) return bad("not a feature cache file (bad magic)");
-  std::size_t pos = 8;
-  if (Get<std::uint32_t>(in, pos) != kFormatVersion) return bad("unsupported format version");
-  if (Get<std::uint32_t>(in, pos) != kSiftDescriptorSize) return bad("unexpected descriptor size");
-  if (Get<std::uint64_t>(in, pos) != key) return bad("the entry belongs to another scan or options");
-  ScanFeatures f;
-  f.rows = Get<std::int32_t>(in, pos);
-  f.cols = Get<std::int32_t>(in, pos);
-  const auto n = Get<std::uint64_t>(in, pos);
-  if (f.rows != scan.rows || f.cols != scan.cols) return bad("grid size differs from the scan's");
-  const std::uint64_t per_feature = (kKeypointFloats + kSiftDescriptorSize) * sizeof(float);
-  if (n > (in.size() / per_feature) || in.size() != kHeaderBytes + n * per_feature + 8)
-    return bad("size " + std::to_string(in.size()) + " bytes does not match " + std::to_string(n) + " features");
-  std::size_t checksum_pos = in.size() - 8;
-  if (Get<std::uint64_t>(in, checksum_pos) != PayloadChecksum(in.data() + kHeaderBytes, in.size() - kHeaderBytes - 8))
-    return bad("checksum mismatch (corrupt data)");
-  f.keypoints.resize(n);
-  for (auto& k : f.keypoints) {
-    float values[kKeypointFloats];
-    std::memcpy(values, in.data() + pos, sizeof(values));
-    pos += sizeof(values);
-    k = Keypoint{values[0], values[1], values[2], values[3], values[4]};
-  }
-  f.descriptors.resize(n * kSiftDescriptorSize);
-  std::memcpy(f.descriptors.data(), in.data() + pos, f.descriptors.size() * sizeof(float));
-  return f;
-}
 
 std::string Hex(std::uint64_t v) {
   char buf[17];
@@ -200,6 +169,37 @@ std::filesystem::path FeatureCachePath(const Scan& scan, const SiftOptions& opti
   return cache_dir / ("sift_" + Hex(FeatureCacheKey(scan, options)) + ".feat");
 }
 
+Expected<ScanFeatures> ParseFeatureCacheEntry(const std::string& in, std::uint64_t key, const Scan& scan) {
+  auto bad = [](const std::string& why) { return MakeError(ErrorCode::kParseError, why); };
+  if (in.size() < kHeaderBytes + 8) return bad("truncated header (" + std::to_string(in.size()) + " bytes)");
+  if (std::memcmp(in.data(), kMagic, 8) != 0) return bad("not a feature cache file (bad magic)");
+  std::size_t pos = 8;
+  if (Get<std::uint32_t>(in, pos) != kFormatVersion) return bad("unsupported format version");
+  if (Get<std::uint32_t>(in, pos) != kSiftDescriptorSize) return bad("unexpected descriptor size");
+  if (Get<std::uint64_t>(in, pos) != key) return bad("the entry belongs to another scan or options");
+  ScanFeatures f;
+  f.rows = Get<std::int32_t>(in, pos);
+  f.cols = Get<std::int32_t>(in, pos);
+  const auto n = Get<std::uint64_t>(in, pos);
+  if (f.rows != scan.rows || f.cols != scan.cols) return bad("grid size differs from the scan's");
+  const std::uint64_t per_feature = (kKeypointFloats + kSiftDescriptorSize) * sizeof(float);
+  if (n > (in.size() / per_feature) || in.size() != kHeaderBytes + n * per_feature + 8)
+    return bad("size " + std::to_string(in.size()) + " bytes does not match " + std::to_string(n) + " features");
+  std::size_t checksum_pos = in.size() - 8;
+  if (Get<std::uint64_t>(in, checksum_pos) != PayloadChecksum(in.data() + kHeaderBytes, in.size() - kHeaderBytes - 8))
+    return bad("checksum mismatch (corrupt data)");
+  f.keypoints.resize(n);
+  for (auto& k : f.keypoints) {
+    float values[kKeypointFloats];
+    std::memcpy(values, in.data() + pos, sizeof(values));
+    pos += sizeof(values);
+    k = Keypoint{values[0], values[1], values[2], values[3], values[4]};
+  }
+  f.descriptors.resize(n * kSiftDescriptorSize);
+  std::memcpy(f.descriptors.data(), in.data() + pos, f.descriptors.size() * sizeof(float));
+  return f;
+}
+
 Expected<ScanFeatures> LoadOrDetectFeatures(const Scan& scan, const SiftOptions& options,
                                             const std::filesystem::path& cache_dir, bool* from_cache) {
   if (from_cache) *from_cache = false;
@@ -213,7 +213,7 @@ Expected<ScanFeatures> LoadOrDetectFeatures(const Scan& scan, const SiftOptions&
     std::ifstream in(path, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (!in.bad()) {
-      Expected<ScanFeatures> cached = Deserialize(bytes, key, scan);
+      Expected<ScanFeatures> cached = ParseFeatureCacheEntry(bytes, key, scan);
       if (cached) {
         if (from_cache) *from_cache = true;
         return cached;

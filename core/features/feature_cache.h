@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 
 #include "core/common/expected.h"
 #include "core/features/sift.h"
@@ -26,6 +27,10 @@ std::uint64_t ScanContentHash(const Scan& scan);
 std::uint64_t FeatureCacheKey(const Scan& scan, const SiftOptions& options);
 std::filesystem::path FeatureCachePath(const Scan& scan, const SiftOptions& options,
                                        const std::filesystem::path& cache_dir);
+
+// Parses the bytes of a cache entry for `scan` under `key`; an error says what is wrong (truncated,
+// another scan's entry, corrupt). Exposed for the fuzz harness (tests/fuzz).
+Expected<ScanFeatures> ParseFeatureCacheEntry(const std::string& bytes, std::uint64_t key, const Scan& scan);
 
 // Returns the cached features of (scan, options) if cache_dir holds a valid entry, else runs
 // DetectFeatures and stores the result (cache_dir is created if missing; failing to write the cache

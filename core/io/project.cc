@@ -295,7 +295,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
       fs::equivalent(path, project.file, ec)) {
     Expected<std::string> now = ReadWholeFile(path);
     if (now && Digest(*now) != project.disk_digest) {
-      return MakeError(ErrorCode::kFailed, "project '" + path.string() +
+      return MakeError(ErrorCode::kConflict, "project '" + path.string() +
                                                "' changed on disk since it was read (another run or an editor wrote "
                                                "it); nothing was saved — open it again, or save under another name");
     }

@@ -1,7 +1,8 @@
 #include "core/io/project_lock.h"
 
 #include <fcntl.h>
-#include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -12,7 +13,7 @@
 namespace scanreg::io {
 namespace {
 
-// The pid and description in an existing lock file; pid 0 when unreadable.
+// The pid and description in a lock file (what its holder wrote); pid 0 when unreadable.
 std::pair<long, std::string> ReadLock(const std::filesystem::path& path) {
   std::ifstream in(path);
   long pid = 0;
@@ -23,55 +24,65 @@ std::pair<long, std::string> ReadLock(const std::filesystem::path& path) {
   return {pid, what.substr(0, 200)};
 }
 
-bool Running(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH); }
-
 }  // namespace
 
 std::filesystem::path ProjectLockPath(const std::filesystem::path& project) {
   return project.parent_path() / ("." + project.filename().string() + ".lock");
 }
 
+// The lock is an flock() on the lock file, held as long as the holder keeps it open: the kernel
+// releases it when the holder exits, however it exits (kill -9 included), so a stale lock needs no
+// guess about process ids, and two runs that find one cannot both take it over. The pid and the
+// command written into the file are for the message only.
 Expected<ProjectLock> ProjectLock::Acquire(const std::filesystem::path& project, const std::string& what) {
   const std::filesystem::path path = ProjectLockPath(std::filesystem::absolute(project));
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd >= 0) {
-      std::ostringstream text;
-      text << ::getpid() << " " << what << "\n";
-      const std::string s = text.str();
-      const bool ok = ::write(fd, s.data(), s.size()) == static_cast<ssize_t>(s.size());
-      ::close(fd);
-      if (!ok) {
-        std::filesystem::remove(path);
-        return MakeError(ErrorCode::kIoError, "cannot write the lock file '" + path.string() + "' (disk full?)");
-      }
-      return ProjectLock(path);
-    }
-    if (errno != EEXIST) {
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) {
       return MakeError(ErrorCode::kIoError, "cannot create the lock file '" + path.string() + "' beside project '" +
                                                 project.string() + "': " + std::strerror(errno) +
                                                 " (is the folder writable?)");
     }
-    const auto [pid, holder] = ReadLock(path);
-    if (Running(pid)) {
-      return MakeError(ErrorCode::kFailed, "project '" + project.string() + "' is being written by another run (process " +
-                                               std::to_string(pid) + ": " + holder +
-                                               "); wait for it to finish, then run this again");
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd);
+      const auto [pid, holder] = ReadLock(path);
+      return MakeError(ErrorCode::kConflict,
+                       "project '" + project.string() + "' is being written by another run (process " +
+                           (pid > 0 ? std::to_string(pid) : std::string("?")) + ": " + holder +
+                           "); wait for it to finish, then run this again");
     }
-    // Left by a process that no longer runs (or unreadable): take it over.
-    std::error_code ec;
-    std::filesystem::remove(path, ec);
+    // A holder that was releasing removed the file between our open and flock: ours is an orphan
+    // inode, and the next run would create another file. Only the file at the path counts.
+    struct stat at_path {}, ours {};
+    if (::stat(path.c_str(), &at_path) != 0 || ::fstat(fd, &ours) != 0 || at_path.st_ino != ours.st_ino ||
+        at_path.st_dev != ours.st_dev) {
+      ::close(fd);
+      continue;
+    }
+    std::ostringstream text;
+    text << ::getpid() << " " << what << "\n";
+    const std::string s = text.str();
+    if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, s.data(), s.size(), 0) != static_cast<ssize_t>(s.size())) {
+      ::close(fd);
+      return MakeError(ErrorCode::kIoError, "cannot write the lock file '" + path.string() + "' (disk full?)");
+    }
+    return ProjectLock(path, fd);
   }
-  return MakeError(ErrorCode::kFailed, "project '" + project.string() + "': could not take its lock file '" +
-                                           path.string() + "'; another run keeps creating it");
+  return MakeError(ErrorCode::kConflict, "project '" + project.string() + "': could not take its lock file '" +
+                                             path.string() + "'; other runs keep taking and releasing it");
 }
 
-ProjectLock::ProjectLock(ProjectLock&& other) noexcept : path_(std::move(other.path_)) { other.path_.clear(); }
+ProjectLock::ProjectLock(ProjectLock&& other) noexcept : path_(std::move(other.path_)), fd_(other.fd_) {
+  other.path_.clear();
+  other.fd_ = -1;
+}
 
 ProjectLock::~ProjectLock() {
-  if (path_.empty()) return;
+  if (fd_ < 0) return;
+  // Removed while still held, so that no one locks the file being removed; then released.
   std::error_code ec;
   std::filesystem::remove(path_, ec);
+  ::close(fd_);
 }
 
 }  // namespace scanreg::io

@@ -1,8 +1,8 @@
 // Runs that cannot trample each other (issue 16, item 4): one writer per project. A command that
-// will save a project holds a lock file beside it, ".<name>.lock", with its process id and what it
-// does; a second writer refuses at once with that information instead of silently overwriting the
-// first one's result minutes later. A lock left by a process that no longer runs (kill -9) is
-// taken over.
+// will save a project holds a lock on a file beside it, ".<name>.lock" (flock; the file says which
+// process and what it does); a second writer refuses at once with that information instead of
+// silently overwriting the first one's result minutes later. The kernel drops the lock of a
+// process that no longer runs (kill -9), so the next run takes it.
 #pragma once
 
 #include <filesystem>
@@ -19,13 +19,14 @@ class ProjectLock {
   ProjectLock(ProjectLock&& other) noexcept;
   ProjectLock& operator=(ProjectLock&&) = delete;
   ProjectLock(const ProjectLock&) = delete;
-  ~ProjectLock();  // removes the lock file
+  ~ProjectLock();  // removes the lock file and releases the lock
 
   const std::filesystem::path& path() const { return path_; }
 
  private:
-  explicit ProjectLock(std::filesystem::path path) : path_(std::move(path)) {}
+  ProjectLock(std::filesystem::path path, int fd) : path_(std::move(path)), fd_(fd) {}
   std::filesystem::path path_;
+  int fd_ = -1;  // open, with the flock held
 };
 
 // The lock file of a project: ".<name>.lock" in its folder.

@@ -145,22 +145,6 @@ bool IsBlank(std::string_view line) {
   return std::all_of(line.begin(), line.end(), [](char c) { return IsSpace(c); });
 }
 
-std::string EscapeControlBytes(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char ch : text) {
-    const unsigned char c = static_cast<unsigned char>(ch);
-    if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out;
-}
-
 std::string QuoteToken(std::string_view token) {
   std::string s = EscapeControlBytes(token.substr(0, 40));
   if (token.size() > 40) s += "...";

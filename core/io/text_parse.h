@@ -55,9 +55,6 @@ std::string_view NextToken(std::string_view* line);
 
 bool IsBlank(std::string_view line);
 
-// Bytes below 0x20 and 0x7f as \xNN, so that a message quoting a file never drives the terminal.
-std::string EscapeControlBytes(std::string_view text);
-
 // A token quoted for an error message (control bytes escaped), shortened when long.
 std::string QuoteToken(std::string_view token);
 

@@ -1,5 +1,11 @@
 # Warnings and build speed settings shared by every target.
 add_compile_options(-Wall -Wextra)
+# ASan + UBSan for the fuzz runs outside CI (tests/fuzz/fuzz_main.cc): cmake -DSCANREG_SANITIZE=ON.
+option(SCANREG_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+if(SCANREG_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
 find_program(CCACHE_PROGRAM ccache)
 if(CCACHE_PROGRAM)
   set(CMAKE_CXX_COMPILER_LAUNCHER ${CCACHE_PROGRAM})

@@ -3,6 +3,7 @@
 #include "core/io/project_lock.h"
 
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -48,6 +49,45 @@ TEST(ProjectLock, ALockOfAProcessThatNoLongerRunsIsTakenOver) {
   Expected<ProjectLock> lock = ProjectLock::Acquire(project, "scanreg-cli register");
   ASSERT_TRUE(lock.ok()) << lock.error().ToString();
   EXPECT_NE(ReadText(ProjectLockPath(project)).find(std::to_string(::getpid())), std::string::npos);
+}
+
+TEST(ProjectLock, RunsRacingForAStaleLockNeverHoldItTogether) {
+  // Eight processes start at once on a project whose lock was left by a killed run; each that gets
+  // the lock marks "I hold it" with an exclusive file for a moment. Two holders at a time would
+  // find the mark taken.
+  test::TempDir dir;
+  const std::filesystem::path project = dir / "p.scanreg.json";
+  const std::filesystem::path mark = dir / "holder";
+  for (int round = 0; round < 5; ++round) {
+    std::ofstream(ProjectLockPath(project)) << "999999 scanreg-cli register (killed)\n";
+    std::vector<pid_t> children;
+    for (int k = 0; k < 8; ++k) {
+      const pid_t child = ::fork();
+      ASSERT_GE(child, 0);
+      if (child == 0) {
+        Expected<ProjectLock> lock = ProjectLock::Acquire(project, "racer");
+        if (!lock.ok()) ::_exit(lock.error().code == ErrorCode::kConflict ? 1 : 3);
+        const int fd = ::open(mark.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+        if (fd < 0) ::_exit(2);  // someone else holds it too
+        ::usleep(20000);
+        ::close(fd);
+        std::filesystem::remove(mark);
+        ::_exit(0);
+      }
+      children.push_back(child);
+    }
+    int holders = 0;
+    for (pid_t child : children) {
+      int status = 0;
+      ASSERT_EQ(::waitpid(child, &status, 0), child);
+      ASSERT_TRUE(WIFEXITED(status));
+      const int code = WEXITSTATUS(status);
+      EXPECT_NE(code, 2) << "two runs held the lock at once";
+      EXPECT_NE(code, 3) << "a run failed for another reason than the lock";
+      holders += code == 0;
+    }
+    EXPECT_GE(holders, 1) << "the stale lock was never taken over";
+  }
 }
 
 TEST(ProjectLock, ASaveOverAProjectChangedOnDiskIsRefusedAndWritesNothing) {

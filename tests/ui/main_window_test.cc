@@ -7,6 +7,7 @@
 #include <QLineEdit>
 #include <QMenuBar>
 #include <QMessageBox>
+#include <QPushButton>
 #include <QSignalSpy>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
@@ -14,6 +15,7 @@
 #include <QtTest/QtTest>
 
 #include "core/io/project.h"
+#include "core/io/project_lock.h"
 #include "core/io/project_tree.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/register_settings.h"
@@ -130,6 +132,53 @@ class MainWindowTest : public QObject {
     QVERIFY(window.dirty());
     window.undoStack()->undo();
     QCOMPARE(window.project().settings.at("register.fine"), std::string("em"));
+  }
+
+  void SaveRefusesALockedOrChangedProjectAndOffersReload() {
+    QTemporaryDir dir;
+    scanreg::SimulatedProjectOptions options;
+    options.stations = 2;
+    options.scanner.cols = 200;
+    options.scanner.rows = 50;
+    scanreg::NullProgress progress;
+    const auto simulated = scanreg::pipeline::WriteSimulatedProject(options, dir.filePath("p").toStdString(), progress,
+                                                                    scanreg::CancelToken());
+    QVERIFY(simulated.ok());
+    const QString path = QString::fromStdString(simulated->file.string());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(path));
+    QVERIFY(WaitForJob(window, 120000));
+
+    {  // another run (here: this process, as `scanreg-cli register` would) holds the project's lock
+      auto lock = scanreg::io::ProjectLock::Acquire(simulated->file, "scanreg-cli register");
+      QVERIFY(lock.ok());
+      QVERIFY(!window.SaveProject(path));
+      auto* box = window.findChild<QMessageBox*>("ErrorDialog");
+      QVERIFY(box != nullptr);
+      QVERIFY2(box->text().contains("being written by another run"), qPrintable(box->text()));
+      box->close();
+      QTest::qWait(50);
+    }
+
+    // Another program changes the project on disk; the GUI's save does not overwrite it.
+    auto disk = scanreg::io::LoadProject(simulated->file);
+    QVERIFY(disk.ok());
+    disk->settings["noise"] = "0.02";
+    QVERIFY(scanreg::io::SaveProject(*disk, simulated->file).ok());
+    const QByteArray before = [&] { QFile f(path); f.open(QIODevice::ReadOnly); return f.readAll(); }();
+    QVERIFY(!window.SaveProject(path));
+    const QByteArray after = [&] { QFile f(path); f.open(QIODevice::ReadOnly); return f.readAll(); }();
+    QCOMPARE(after, before);
+    auto* conflict = window.findChild<QMessageBox*>("ConflictDialog");
+    QVERIFY(conflict != nullptr);
+    auto* reload = conflict->findChild<QPushButton*>("ReloadButton");
+    QVERIFY(reload != nullptr);
+    reload->click();
+    QVERIFY(WaitForJob(window, 120000));
+    QCOMPARE(QString::fromStdString(window.project().settings.at("noise")), QString("0.02"));
+    QVERIFY(!window.dirty());
+    QVERIFY(window.SaveProject(path));  // what was reloaded saves again
   }
 
   void DemoProjectLoadsRegistersCancelsAndSaves() {
