@@ -49,7 +49,7 @@ int RunNew(const std::vector<std::string>& argv) {
   CancelToken cancel;
   auto project = pipeline::CreateProject(args->positional()[0], options, progress, cancel);
   if (!project) return Fail(project.error());
-  std::printf("created %s with %zu scans\n", project->file.string().c_str(), project->scans.size());
+  std::printf("created %s with %zu scans\n", project->project.file.string().c_str(), project->project.scans.size());
   return 0;
 }
 

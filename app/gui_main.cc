@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   };
   const bool want_register = parser.isSet(reg);
   QObject::connect(window.jobs(), &scanreg::ui::JobRunner::Succeeded, &window,
-                   [&window, want_register, finish](const QString& title, const std::any&) {
+                   [&window, want_register, finish](const QString& title) {
                      if (want_register && !title.startsWith(QObject::tr("Registering"))) {
                        window.RegisterProject();
                      } else {

@@ -32,7 +32,7 @@ class QueuedProgress final : public ProgressSink {
 
 }  // namespace
 
-JobRunner::JobRunner(QObject* parent) : QObject(parent) { qRegisterMetaType<std::any>("std::any"); }
+JobRunner::JobRunner(QObject* parent) : QObject(parent) {}
 
 JobRunner::~JobRunner() {
   if (cancel_) cancel_->Cancel();
@@ -43,22 +43,23 @@ void JobRunner::Join() {
   if (thread_.joinable()) thread_.join();
 }
 
-bool JobRunner::Start(const QString& title, Job job) {
+bool JobRunner::StartErased(const QString& title, ErasedJob job, std::function<void(std::any&)> done) {
   if (busy_) return false;
   Join();  // a finished worker may not have been joined yet
   busy_ = true;
   cancel_ = std::make_shared<CancelToken>();
   emit Started(title);
   auto cancel = cancel_;
-  thread_ = std::thread([this, title, job = std::move(job), cancel] {
+  thread_ = std::thread([this, title, job = std::move(job), done = std::move(done), cancel] {
     QueuedProgress progress(this);
     Expected<std::any> result = job(progress, *cancel);
     QMetaObject::invokeMethod(
         this,
-        [this, title, result = std::move(result)]() mutable {
-          busy_ = false;
+        [this, title, done, result = std::move(result)]() mutable {
+          busy_ = false;  // the callback may start the next job
           if (result.ok()) {
-            emit Succeeded(title, std::move(result.value()));
+            done(result.value());
+            emit Succeeded(title);
           } else {
             emit Failed(title, QString::fromStdString(result.error().message),
                         result.error().code == ErrorCode::kCancelled);

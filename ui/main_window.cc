@@ -34,6 +34,7 @@
 #include "ui/network_panel.h"
 #include "ui/pair_inspector.h"
 #include "ui/pose_dialog.h"
+#include "ui/project_document.h"
 #include "ui/project_panels.h"
 #include "ui/register_settings_dialog.h"
 #include "ui/scan_cloud_actors.h"
@@ -42,20 +43,6 @@
 
 namespace scanreg::ui {
 namespace {
-
-// An edit of the project (override, accept / reject), undone by restoring the snapshot before it.
-class EditCommand : public QUndoCommand {
- public:
-  EditCommand(MainWindow* window, const QString& text, io::Project before, io::Project after, bool rerun)
-      : QUndoCommand(text), window_(window), before_(std::move(before)), after_(std::move(after)), rerun_(rerun) {}
-  void undo() override { window_->ApplyEdit(before_, false); }
-  void redo() override { window_->ApplyEdit(after_, rerun_); }
-
- private:
-  MainWindow* window_;
-  io::Project before_, after_;
-  bool rerun_;
-};
 
 struct LoadedProject {
   io::Project project;
@@ -73,10 +60,10 @@ struct Registered {
   Eigen::MatrixXi confusion;
 };
 
-Expected<std::any> LoadJob(io::Project project, ProgressSink& progress, const CancelToken& cancel) {
+Expected<LoadedProject> LoadJob(io::Project project, ProgressSink& progress, const CancelToken& cancel) {
   Expected<std::vector<Scan>> scans = pipeline::LoadProjectScans(project, progress, cancel);
   if (!scans) return scans.error();
-  return std::any(LoadedProject{std::move(project), std::move(*scans)});
+  return LoadedProject{std::move(project), std::move(*scans)};
 }
 
 }  // namespace
@@ -85,7 +72,14 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   setWindowTitle(tr("scanreg — terrestrial laser scan registration"));
   setObjectName("MainWindow");
   jobs_ = new JobRunner(this);
-  undo_ = new QUndoStack(this);
+  doc_ = new ProjectDocument(this);
+  connect(doc_, &ProjectDocument::Changed, this, &MainWindow::Refresh);
+  connect(doc_, &ProjectDocument::Opened, this, [this] { scene_->ScansReplaced(true); });
+  connect(doc_, &ProjectDocument::ScansChanged, this, [this] { scene_->ScansReplaced(false); });
+  connect(doc_, &ProjectDocument::DirtyChanged, this, &MainWindow::UpdateTitle);
+  connect(doc_, &ProjectDocument::RerunRequested, this, [this] {
+    if (!jobs_->busy()) RegisterProject();
+  });
   view3d_ = new View3d(this);
   view3d_->setObjectName("View3d");
   setCentralWidget(view3d_);
@@ -113,7 +107,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     progress_->setValue(static_cast<int>(f * 1000));
     statusBar()->showMessage(stage);
   });
-  connect(jobs_, &JobRunner::Succeeded, this, &MainWindow::OnJobSucceeded);
+  connect(jobs_, &JobRunner::Succeeded, this, [this](const QString& title) {
+    SetBusy(false);
+    statusBar()->showMessage(title + tr(": done"), 5000);
+  });
   connect(jobs_, &JobRunner::Failed, this, &MainWindow::OnJobFailed);
   inspector_ = new PairInspector(this);  // after the window's own job connections
 
@@ -137,6 +134,12 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 }
 
 MainWindow::~MainWindow() { SetLogHandler({}); }
+
+const io::Project& MainWindow::project() const { return doc_->project(); }
+const std::vector<Scan>& MainWindow::scans() const { return doc_->scans(); }
+const Eigen::MatrixXi& MainWindow::confusion() const { return doc_->confusion(); }
+QUndoStack* MainWindow::undoStack() const { return doc_->undoStack(); }
+bool MainWindow::dirty() const { return doc_->dirty(); }
 
 void MainWindow::CreateDocks() {
   scan_list_ = new ScanListPanel(this);
@@ -206,10 +209,10 @@ void MainWindow::CreateMenus() {
     AddScans(files);
   });
   QAction* save = file->addAction(tr("&Save project"), this, [this] {
-    if (project_.file.empty()) {
+    if (project().file.empty()) {
       SaveProjectAs();
     } else {
-      SaveProject(QString::fromStdString(project_.file.string()));
+      SaveProject(QString::fromStdString(project().file.string()));
     }
   });
   save->setShortcut(QKeySequence::Save);
@@ -225,9 +228,9 @@ void MainWindow::CreateMenus() {
   quit->setShortcut(QKeySequence::Quit);
 
   QMenu* edit = menuBar()->addMenu(tr("&Edit"));
-  QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
+  QAction* undo = doc_->undoStack()->createUndoAction(this, tr("&Undo"));
   undo->setShortcut(QKeySequence::Undo);
-  QAction* redo = undo_->createRedoAction(this, tr("&Redo"));
+  QAction* redo = doc_->undoStack()->createRedoAction(this, tr("&Redo"));
   redo->setShortcut(QKeySequence::Redo);
   edit->addAction(undo);
   edit->addAction(redo);
@@ -264,7 +267,7 @@ void MainWindow::SetBusy(bool busy) {
   progress_->setVisible(busy);
   cancel_->setVisible(busy);
   if (busy) progress_->setValue(0);
-  for (QAction* a : project_actions_) a->setEnabled(!busy && !project_.scans.empty());
+  for (QAction* a : project_actions_) a->setEnabled(!busy && !project().scans.empty());
 }
 
 bool MainWindow::OpenProject(const QString& path) {
@@ -273,37 +276,50 @@ bool MainWindow::OpenProject(const QString& path) {
     ShowError(tr("Cannot open project"), QString::fromStdString(project.error().message));
     return false;
   }
-  return jobs_->Start(tr("Loading %1").arg(path),
-                      [p = std::move(*project)](ProgressSink& progress, const CancelToken& cancel) {
-                        return LoadJob(p, progress, cancel);
-                      });
+  return jobs_->Start<LoadedProject>(
+      tr("Loading %1").arg(path),
+      [p = std::move(*project)](ProgressSink& progress, const CancelToken& cancel) {
+        return LoadJob(p, progress, cancel);
+      },
+      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans)); });
+}
+
+void MainWindow::OnProjectLoaded(io::Project project, std::vector<Scan> scans) {
+  doc_->Open(std::move(project), std::move(scans));
+  if (!this->project().file.empty()) AddRecentProject(QString::fromStdString(this->project().file.string()));
 }
 
 bool MainWindow::OpenDemoProject(const QString& dir) {
-  return jobs_->Start(tr("Simulating the demo project"), [dir](ProgressSink& progress, const CancelToken& cancel) {
+  return jobs_->Start<LoadedProject>(
+      tr("Simulating the demo project"),
+      [dir](ProgressSink& progress, const CancelToken& cancel) -> Expected<LoadedProject> {
     SimulatedProjectOptions options;
     options.stations = 5;
     options.scanner.cols = 1500;
     options.scanner.rows = 375;
     SubProgress sim(progress, 0.0, 0.7);
     Expected<io::Project> project = pipeline::WriteSimulatedProject(options, dir.toStdString(), sim, cancel);
-    if (!project) return Expected<std::any>(project.error());
+    if (!project) return project.error();
     SubProgress load(progress, 0.7, 1.0);
     return LoadJob(std::move(*project), load, cancel);
-  });
+      },
+      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans)); });
 }
 
 bool MainWindow::RegisterProject() {
-  if (project_.scans.empty()) return false;
+  if (project().scans.empty()) return false;
   const pipeline::RegisterOptions options = RegistrationOptions();
-  return jobs_->Start(tr("Registering"), [project = project_, scans = scans_, options](
-                                             ProgressSink& progress, const CancelToken& cancel) mutable {
+  return jobs_->Start<Registered>(
+      tr("Registering"),
+      [project = project(), scans = scans(), options](ProgressSink& progress,
+                                                       const CancelToken& cancel) mutable -> Expected<Registered> {
     pipeline::StoreRegisterSettings(options, &project.settings);  // what this run used, as the CLI saves it
     Expected<pipeline::ProjectRegistration> r =
         pipeline::RegisterProjectScans(project, scans, options, progress, cancel);
-    if (!r) return Expected<std::any>(r.error());
-    return Expected<std::any>(std::any(Registered{std::move(project), r->confusion}));
-  });
+    if (!r) return r.error();
+    return Registered{std::move(project), r->confusion};
+      },
+      [this](Registered& r) { doc_->ApplyRegistration(tr("register the scans"), std::move(r.project), r.confusion); });
 }
 
 void MainWindow::SaveProjectAs() {
@@ -324,7 +340,7 @@ bool MainWindow::SaveProject(const QString& path) {
     return false;
   }
   std::uint64_t digest = 0;
-  if (Status s = io::SaveProject(project_, path.toStdString(), &digest); !s) {
+  if (Status s = io::SaveProject(project(), path.toStdString(), &digest); !s) {
     if (s.error().code == ErrorCode::kConflict) {
       OfferReload(path, QString::fromStdString(s.error().message));
     } else {
@@ -332,17 +348,15 @@ bool MainWindow::SaveProject(const QString& path) {
     }
     return false;
   }
-  project_.file = std::filesystem::absolute(path.toStdString());
-  project_.disk_digest = digest;
-  dirty_ = false;
+  doc_->MarkSaved(std::filesystem::absolute(path.toStdString()), digest);
   statusBar()->showMessage(tr("Saved %1").arg(path), 5000);
   return true;
 }
 
 void MainWindow::SetParentOverride(const QString& child, const QString& parent) {
-  const int c = project_.FindScan(child.toStdString());
-  if (c < 0 || child == parent || (!parent.isEmpty() && project_.FindScan(parent.toStdString()) < 0)) return;
-  io::Project after = project_;
+  const int c = project().FindScan(child.toStdString());
+  if (c < 0 || child == parent || (!parent.isEmpty() && project().FindScan(parent.toStdString()) < 0)) return;
+  io::Project after = project();
   if (parent.isEmpty()) {
     after.scans[c].parent_override.reset();
   } else {
@@ -350,11 +364,11 @@ void MainWindow::SetParentOverride(const QString& child, const QString& parent) 
   }
   const QString text =
       parent.isEmpty() ? tr("clear the parent of %1").arg(child) : tr("register %1 to %2").arg(child, parent);
-  undo_->push(new EditCommand(this, text, project_, std::move(after), true));
+  doc_->Edit(text, std::move(after), true);
 }
 
 void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject) {
-  io::Project after = project_;
+  io::Project after = project();
   bool found = false;
   for (io::LinkRecord& l : after.links) {
     if (l.parent != parent.toStdString() || l.child != child.toStdString()) continue;
@@ -366,22 +380,22 @@ void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bo
   const QString text = reject   ? tr("reject %1 → %2").arg(child, parent)
                        : accept ? tr("accept %1 → %2").arg(child, parent)
                                 : tr("clear the decision on %1 → %2").arg(child, parent);
-  undo_->push(new EditCommand(this, text, project_, std::move(after), reject));
+  doc_->Edit(text, std::move(after), reject);
 }
 
 pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
-  Expected<pipeline::RegisterOptions> saved = pipeline::ProjectRegisterOptions(project_);
+  Expected<pipeline::RegisterOptions> saved = pipeline::ProjectRegisterOptions(project());
   pipeline::RegisterOptions options = saved ? *saved : pipeline::RegisterOptions();
   if (!saved) LogWarning(saved.error().message + "; the defaults are used (Registration → Settings… sets them)");
-  options.feature_cache_dir = project_.file.parent_path() / ".scanreg-cache";
+  options.feature_cache_dir = project().file.parent_path() / ".scanreg-cache";
   return options;
 }
 
 bool MainWindow::SetRegisterOptions(const pipeline::RegisterOptions& options) {
-  io::Project after = project_;
+  io::Project after = project();
   pipeline::StoreRegisterSettings(options, &after.settings);
-  if (after.settings == project_.settings) return false;
-  undo_->push(new EditCommand(this, tr("change the registration settings"), project_, std::move(after), false));
+  if (after.settings == project().settings) return false;
+  doc_->Edit(tr("change the registration settings"), std::move(after));
   return true;
 }
 
@@ -396,25 +410,25 @@ RegisterSettingsDialog* MainWindow::EditRegisterSettings() {
 }
 
 bool MainWindow::SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents) {
-  io::Project after = project_;
+  io::Project after = project();
   if (Status s = pipeline::SetScanPose(scan.toStdString(), world_from_scan, move_dependents, after); !s) {
     ShowError(tr("Cannot place %1").arg(scan), QString::fromStdString(s.error().message));
     return false;
   }
-  undo_->push(new EditCommand(this, tr("place %1 by hand").arg(scan), project_, std::move(after), false));
+  doc_->Edit(tr("place %1 by hand").arg(scan), std::move(after));
   return true;
 }
 
 PoseDialog* MainWindow::EditSelectedScanPose() {
   const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
-  const int s = item ? project_.FindScan(item->text().toStdString()) : -1;
+  const int s = item ? project().FindScan(item->text().toStdString()) : -1;
   if (s < 0) {
     ShowError(tr("Edit scan pose"),
               tr("Select a scan in the scan list first, then choose Registration → Edit scan pose."));
     return nullptr;
   }
   const QString name = item->text();
-  auto* dialog = new PoseDialog(name, project_.scans[s].world_from_scan, this);
+  auto* dialog = new PoseDialog(name, project().scans[s].world_from_scan, this);
   dialog->setAttribute(Qt::WA_DeleteOnClose);
   connect(dialog, &QDialog::accepted, this,
           [this, dialog, name] { SetScanPose(name, dialog->Pose(), dialog->MoveDependents()); });
@@ -423,7 +437,7 @@ PoseDialog* MainWindow::EditSelectedScanPose() {
 }
 
 bool MainWindow::UsePairResult(const io::LinkRecord& link) {
-  io::Project after = project_;
+  io::Project after = project();
   if (Status s = pipeline::ApplyPairResult(link, after); !s) {
     ShowError(tr("Cannot use this pair registration"), QString::fromStdString(s.error().message));
     return false;
@@ -431,49 +445,8 @@ bool MainWindow::UsePairResult(const io::LinkRecord& link) {
   const QString text = tr("use the pair registration %1 → %2 (%3)")
                            .arg(QString::fromStdString(link.child), QString::fromStdString(link.parent),
                                 QString::fromStdString(link.method));
-  undo_->push(new EditCommand(this, text, project_, std::move(after), false));
+  doc_->Edit(text, std::move(after));
   return true;
-}
-
-void MainWindow::ApplyEdit(const io::Project& project, bool rerun) {
-  project_ = project;
-  for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
-    scans_[i].world_from_scan = project_.scans[i].world_from_scan;
-  dirty_ = true;
-  emit PosesChanged();
-  Refresh();
-  if (rerun && !jobs_->busy()) RegisterProject();
-}
-
-void MainWindow::OnJobSucceeded(const QString& title, std::any result) {
-  SetBusy(false);
-  if (auto* loaded = std::any_cast<LoadedProject>(&result)) {
-    project_ = std::move(loaded->project);
-    scans_ = std::move(loaded->scans);
-    undo_->clear();
-    const Eigen::MatrixXi* saved = project_.CurrentConfusion();  // from the last registration, if any
-    confusion_ = saved ? *saved : Eigen::MatrixXi();
-    dirty_ = false;
-    AddRecentProject(QString::fromStdString(project_.file.string()));
-    emit PosesChanged();
-  } else if (auto* added = std::any_cast<AddedScans>(&result)) {
-    project_ = std::move(added->project);
-    for (Scan& s : added->scans) scans_.push_back(std::move(s));
-    undo_->clear();  // the snapshots hold fewer scans
-    confusion_.resize(0, 0);
-    dirty_ = true;
-    emit PosesChanged();
-  } else if (auto* reg = std::any_cast<Registered>(&result)) {
-    project_ = std::move(reg->project);
-    confusion_ = reg->confusion;
-    for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
-      scans_[i].world_from_scan = project_.scans[i].world_from_scan;
-    dirty_ = true;
-    emit PosesChanged();
-  }
-  SetBusy(false);
-  Refresh();
-  statusBar()->showMessage(title + tr(": done"), 5000);
 }
 
 void MainWindow::OnJobFailed(const QString& title, const QString& message, bool cancelled) {
@@ -486,29 +459,37 @@ void MainWindow::OnJobFailed(const QString& title, const QString& message, bool 
 }
 
 void MainWindow::Refresh() {
-  scan_list_->Show(project_, scans_);
+  const io::Project& p = project();
+  const Eigen::MatrixXi& c = confusion();
+  scan_list_->Show(p, scans());
   // The confusion matrix in scan order (root, then as the registration placed the scans), as in the
   // report; empty when there is none, so no stale matrix is shown.
-  const std::vector<int> order = io::OrderedScanIndices(project_);
+  const std::vector<int> order = io::OrderedScanIndices(p);
   std::vector<std::string> names;
-  for (int i : order) names.push_back(project_.scans[i].name);
+  for (int i : order) names.push_back(p.scans[i].name);
   Eigen::MatrixXi ordered;
-  if (confusion_.rows() == static_cast<Eigen::Index>(order.size()) && confusion_.cols() == confusion_.rows()) {
-    ordered.resize(confusion_.rows(), confusion_.cols());
+  if (c.rows() == static_cast<Eigen::Index>(order.size()) && c.cols() == c.rows()) {
+    ordered.resize(c.rows(), c.cols());
     for (std::size_t i = 0; i < order.size(); ++i)
-      for (std::size_t j = 0; j < order.size(); ++j) ordered(i, j) = confusion_(order[i], order[j]);
+      for (std::size_t j = 0; j < order.size(); ++j) ordered(i, j) = c(order[i], order[j]);
   }
   confusion_panel_->Show(ordered, names);
-  network_->Show(project_);
+  network_->Show(p);
   bool any_registered = false;
-  for (const io::ProjectScan& s : project_.scans) any_registered |= s.registered;
+  for (const io::ProjectScan& s : p.scans) any_registered |= s.registered;
   // Before registration, show the scans as they stand (each at its current pose).
-  io::Project shown = project_;
+  io::Project shown = p;
   if (!any_registered)
     for (io::ProjectScan& s : shown.scans) s.registered = true;
-  scene_->ShowScans(shown, scans_);
-  setWindowTitle(tr("scanreg — %1").arg(QString::fromStdString(project_.file.filename().string())));
-  emit ProjectChanged();
+  scene_->ShowScans(shown, scans());
+  UpdateTitle();
+}
+
+void MainWindow::UpdateTitle() {
+  const QString name = project().file.empty() ? tr("unsaved project")
+                                              : QString::fromStdString(project().file.filename().string());
+  setWindowTitle(tr("scanreg — %1[*]").arg(name));  // [*]: the modified marker
+  setWindowModified(doc_->dirty());
 }
 
 void MainWindow::OfferReload(const QString& path, const QString& message) {
@@ -524,10 +505,9 @@ void MainWindow::OfferReload(const QString& path, const QString& message) {
   QPushButton* save_as = box->addButton(tr("Save as…"), QMessageBox::AcceptRole);
   save_as->setObjectName("SaveAsButton");
   box->addButton(QMessageBox::Cancel);
-  connect(box, &QMessageBox::buttonClicked, this, [this, reload, save_as, path](QAbstractButton* clicked) {
+  connect(box, &QMessageBox::buttonClicked, this, [this, box, reload, save_as, path](QAbstractButton* clicked) {
     if (clicked == reload) {
-      dirty_ = false;  // the user chose to drop them
-      OpenProject(path);
+      OpenProject(path);  // the user chose to drop the unsaved changes
     } else if (clicked == save_as) {
       QTimer::singleShot(0, this, &MainWindow::SaveProjectAs);
     }
@@ -544,15 +524,20 @@ void MainWindow::ShowError(const QString& title, const QString& message) {
 }
 
 bool MainWindow::MaybeSaveChanges() {
-  if (!dirty_) return true;
+  if (!dirty()) return true;
   QMessageBox box(QMessageBox::Question, tr("Unsaved changes"),
                   tr("The changes to %1 have not been saved. Save them first?")
-                      .arg(QString::fromStdString(project_.file.filename().string())),
+                      .arg(QString::fromStdString(project().file.filename().string())),
                   QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, this);
   box.setObjectName("UnsavedChangesDialog");
   const int answer = box.exec();
   if (answer == QMessageBox::Cancel) return false;
-  return answer == QMessageBox::Discard || SaveProject(QString::fromStdString(project_.file.string()));
+  if (answer == QMessageBox::Discard) return true;
+  if (project().file.empty()) {
+    SaveProjectAs();
+    return !dirty();
+  }
+  return SaveProject(QString::fromStdString(project().file.string()));
 }
 
 void MainWindow::FillRecentMenu(QMenu* menu) {
@@ -574,41 +559,44 @@ void MainWindow::FillRecentMenu(QMenu* menu) {
 bool MainWindow::NewProject(const QStringList& scan_files, const QString& project_path) {
   std::vector<std::filesystem::path> files;
   for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start(tr("Creating %1").arg(project_path), [files, path = project_path.toStdString()](
-                                                               ProgressSink& progress, const CancelToken& cancel) {
-    io::Project project;
-    project.file = std::filesystem::absolute(path);
-    Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
-    if (!scans) return Expected<std::any>(scans.error());
-    if (Status s = io::SaveProject(project, path, &project.disk_digest); !s) return Expected<std::any>(s.error());
-    return Expected<std::any>(std::any(LoadedProject{std::move(project), std::move(*scans)}));
-  });
+  return jobs_->Start<pipeline::CreatedProject>(
+      tr("Creating %1").arg(project_path),
+      [files, path = project_path.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
+        pipeline::CreateProjectOptions options;
+        options.scan_files = files;
+        options.keep_scans = true;
+        return pipeline::CreateProject(path, options, progress, cancel);
+      },
+      [this](pipeline::CreatedProject& created) {
+        OnProjectLoaded(std::move(created.project), std::move(created.scans));
+      });
 }
 
 bool MainWindow::AddScans(const QStringList& scan_files) {
-  if (project_.file.empty()) {
+  if (project().file.empty()) {
     ShowError(tr("No project open"), tr("Create a project first (File → New project…), then add scans to it."));
     return false;
   }
   std::vector<std::filesystem::path> files;
   for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start(
-      tr("Adding scans"), [files, project = project_](ProgressSink& progress, const CancelToken& cancel) mutable {
+  return jobs_->Start<AddedScans>(
+      tr("Adding scans"),
+      [files, project = project()](ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<AddedScans> {
         Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
-        if (!scans) return Expected<std::any>(scans.error());
-        return Expected<std::any>(std::any(AddedScans{std::move(project), std::move(*scans)}));
-      });
+        if (!scans) return scans.error();
+        return AddedScans{std::move(project), std::move(*scans)};
+      },
+      [this](AddedScans& added) { doc_->AppendScans(std::move(added.project), std::move(added.scans)); });
 }
 
 bool MainWindow::ExportReport(const QString& dir) {
-  if (project_.scans.empty()) return false;
-  return jobs_->Start(tr("Writing the report to %1").arg(dir),
-                      [project = project_, dir = dir.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
-                        Expected<std::filesystem::path> index = report::WriteReport(project, dir, progress, cancel);
-                        if (!index) return Expected<std::any>(index.error());
-                        LogInfo("report written: " + index->string());
-                        return Expected<std::any>(std::any(*index));
-                      });
+  if (project().scans.empty()) return false;
+  return jobs_->Start<std::filesystem::path>(
+      tr("Writing the report to %1").arg(dir),
+      [project = project(), dir = dir.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
+        return report::WriteReport(project, dir, progress, cancel);
+      },
+      [](std::filesystem::path& index) { LogInfo("report written: " + index.string()); });
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {

@@ -1,12 +1,12 @@
 // The scanreg main window: project menus, the 3D view, dock panels (scans, confusion matrix,
-// log) and a status bar with the running job's progress and a Cancel button. Long jobs (load,
-// demo, registration) run on the JobRunner; results come back by value.
+// log) and a status bar with the running job's progress and a Cancel button. The open project is
+// a ProjectDocument the panels observe; long jobs (load, demo, registration) run on the JobRunner
+// and hand their typed results to the document.
 #pragma once
 
 #include <Eigen/Core>
 #include <QImage>
 #include <QMainWindow>
-#include <any>
 #include <vector>
 
 #include "core/geometry/scan.h"
@@ -26,6 +26,7 @@ class JobRunner;
 class LogPanel;
 class MergePanel;
 class PoseDialog;
+class ProjectDocument;
 class RegisterSettingsDialog;
 class NetworkPanel;
 class PairInspector;
@@ -40,7 +41,8 @@ class MainWindow : public QMainWindow {
   explicit MainWindow(QWidget* parent = nullptr);
   ~MainWindow() override;
 
-  // Start jobs (return false while another job runs). Completion: jobs()->Succeeded / Failed.
+  // Start jobs (return false while another job runs). Completion: jobs()->Succeeded / Failed; the
+  // result is in document() by then.
   bool OpenProject(const QString& path);
   bool OpenDemoProject(const QString& dir);  // simulates a small street project into dir
   bool RegisterProject();
@@ -57,7 +59,7 @@ class MainWindow : public QMainWindow {
   // Applies a pair registration (the pair panel's "Use this result") as an undoable edit; false,
   // with a dialog naming the scans, when it cannot be applied.
   bool UsePairResult(const io::LinkRecord& link);
-  // Redraws the panels and the 3D view from the project.
+  // Redraws the panels and the 3D view from the document (on its Changed signal).
   void Refresh();
   // A new project from scan files (io::SupportedScanExtensions()), saved at project_path; and
   // scans added to the open project (unsaved until Save). Both read the files on the worker.
@@ -79,32 +81,25 @@ class MainWindow : public QMainWindow {
   // Registration → Edit scan pose…: opens the pose dialog for the scan selected in the scan list
   // (window-modal, does not block); returns it (null when no scan is selected), for tests.
   PoseDialog* EditSelectedScanPose();
-  QUndoStack* undoStack() const { return undo_; }
-  // Replaces the project with an edited version (used by the undo commands).
-  void ApplyEdit(const io::Project& project, bool rerun);
 
   JobRunner* jobs() const { return jobs_; }
   View3d* view3d() const { return view3d_; }
-  const io::Project& project() const { return project_; }
-  const std::vector<Scan>& scans() const { return scans_; }
-  const Eigen::MatrixXi& confusion() const { return confusion_; }
+  ProjectDocument* document() const { return doc_; }
+  const io::Project& project() const;
+  const std::vector<Scan>& scans() const;
+  const Eigen::MatrixXi& confusion() const;
+  QUndoStack* undoStack() const;
+  bool dirty() const;
   ScanListPanel* scanList() const { return scan_list_; }
   ConfusionPanel* confusionPanel() const { return confusion_panel_; }
   NetworkPanel* networkPanel() const { return network_; }
   PairInspector* pairInspector() const { return inspector_; }
   ScanScene* scene() const { return scene_; }
   MergePanel* mergePanel() const { return merge_panel_; }
-  bool dirty() const { return dirty_; }
 
   // The window as shown, including the VTK view's frame (null on failure); and saved as a PNG.
   QImage Screenshot();
   bool SaveScreenshot(const QString& path);
-
- signals:
-  // The project's poses or scans were replaced (load, registration, edit): derived results such as
-  // a merged mesh no longer match.
-  void PosesChanged();
-  void ProjectChanged();  // the panels were redrawn from the project (emitted by Refresh)
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -112,17 +107,14 @@ class MainWindow : public QMainWindow {
  private:
   void CreateMenus();
   void CreateDocks();
-  void OnJobSucceeded(const QString& title, std::any result);
+  void OnProjectLoaded(io::Project project, std::vector<Scan> scans);  // opened, created or simulated
+  void UpdateTitle();
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   void SetBusy(bool busy);
   void ShowAbout();
   void FillRecentMenu(QMenu* menu);
 
-  io::Project project_;
-  std::vector<Scan> scans_;
-  Eigen::MatrixXi confusion_;
-  bool dirty_ = false;
-
+  ProjectDocument* doc_ = nullptr;
   JobRunner* jobs_ = nullptr;
   View3d* view3d_ = nullptr;
   ScanListPanel* scan_list_ = nullptr;
@@ -132,7 +124,6 @@ class MainWindow : public QMainWindow {
   PairInspector* inspector_ = nullptr;
   ScanScene* scene_ = nullptr;
   MergePanel* merge_panel_ = nullptr;
-  QUndoStack* undo_ = nullptr;
   QProgressBar* progress_ = nullptr;
   QPushButton* cancel_ = nullptr;
   std::vector<QAction*> project_actions_;  // enabled only with a project and no job

@@ -19,21 +19,11 @@
 #include "ui/app_settings.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/project_document.h"
 #include "ui/scan_scene.h"
 
 namespace scanreg::ui {
 namespace {
-
-// Job results, by value through the JobRunner.
-struct MergedMesh {
-  std::shared_ptr<const merge::Mesh> mesh;
-  std::size_t scans = 0;
-  double seconds = 0.0;
-  merge::MergeMethod method = merge::MergeMethod::kTsdf;
-  double voxel_m = 0.0;
-  std::size_t moving_points = 0;
-  bool removed_moving = false;
-};
 
 struct ExportedMesh {
   QString path;
@@ -44,6 +34,16 @@ const QString kMergeTitle = QObject::tr("Merging the registered scans");
 const QString kExportTitle = QObject::tr("Exporting the mesh");
 
 }  // namespace
+
+struct MergePanel::MergedMesh {
+  std::shared_ptr<const merge::Mesh> mesh;
+  std::size_t scans = 0;
+  double seconds = 0.0;
+  merge::MergeMethod method = merge::MergeMethod::kTsdf;
+  double voxel_m = 0.0;
+  std::size_t moving_points = 0;
+  bool removed_moving = false;
+};
 
 MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), window_(window), scene_(scene) {
   setObjectName("MergePanel");
@@ -141,7 +141,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(export_, &QPushButton::clicked, this, &MergePanel::ChooseExportFile);
   connect(show_scans_, &QCheckBox::toggled, scene_, &ScanScene::SetShowScans);
   connect(show_mesh_, &QCheckBox::toggled, scene_, &ScanScene::SetShowMesh);
-  connect(window_->jobs(), &JobRunner::Succeeded, this, &MergePanel::OnJobSucceeded);
+  connect(window_->jobs(), &JobRunner::Succeeded, this, &MergePanel::UpdateButtons);
   connect(window_->jobs(), &JobRunner::Started, this, &MergePanel::UpdateButtons);
   connect(window_->jobs(), &JobRunner::Failed, this, &MergePanel::UpdateButtons);
   connect(estimate_timer_, &QTimer::timeout, this, &MergePanel::UpdateEstimate);
@@ -150,8 +150,8 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
   connect(max_range_m_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
   connect(keep_moving_, &QCheckBox::toggled, this, later);
-  connect(window_, &MainWindow::ProjectChanged, this, later);
-  connect(window_, &MainWindow::PosesChanged, this, [this] {
+  connect(window_->document(), &ProjectDocument::Changed, this, later);
+  connect(window_->document(), &ProjectDocument::PosesChanged, this, [this] {
     estimate_timer_->start();
     if (!mesh_) return;
     ClearMesh();
@@ -231,23 +231,29 @@ bool MergePanel::Run() {
                        "scans, Ctrl+R), then merge."));
     return false;
   }
-  return window_->jobs()->Start(
-      kMergeTitle, [scans = std::move(scans), options](ProgressSink& progress, const CancelToken& cancel) {
+  return window_->jobs()->Start<MergedMesh>(
+      kMergeTitle,
+      [scans = std::move(scans), options](ProgressSink& progress, const CancelToken& cancel) -> Expected<MergedMesh> {
         Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
-        if (!r) return Expected<std::any>(r.error());
-        MergedMesh merged{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
+        if (!r) return r.error();
+        return MergedMesh{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
                           options.voxel_m, r->moving_points, options.remove_moving};
-        return Expected<std::any>(std::any(std::move(merged)));
-      });
+      },
+      [this](MergedMesh& merged) { OnMerged(merged); });
 }
 
 bool MergePanel::ExportMesh(const QString& path) {
   if (!mesh_ || window_->jobs()->busy()) return false;
-  return window_->jobs()->Start(kExportTitle, [mesh = mesh_, path](ProgressSink& progress, const CancelToken&) {
-    progress.Report(0.0, "Writing " + path.toStdString());
-    if (Status s = pipeline::WriteMesh(path.toStdString(), *mesh); !s) return Expected<std::any>(s.error());
-    return Expected<std::any>(std::any(ExportedMesh{path, mesh->triangles.size()}));
-  });
+  return window_->jobs()->Start<ExportedMesh>(
+      kExportTitle,
+      [mesh = mesh_, path](ProgressSink& progress, const CancelToken&) -> Expected<ExportedMesh> {
+        progress.Report(0.0, "Writing " + path.toStdString());
+        if (Status s = pipeline::WriteMesh(path.toStdString(), *mesh); !s) return s.error();
+        return ExportedMesh{path, mesh->triangles.size()};
+      },
+      [this](ExportedMesh& exported) {
+        summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported.triangles).arg(exported.path));
+      });
 }
 
 void MergePanel::ChooseExportFile() {
@@ -264,23 +270,20 @@ void MergePanel::ChooseExportFile() {
   ExportMesh(path);
 }
 
-void MergePanel::OnJobSucceeded(const QString&, const std::any& result) {
-  if (const auto* merged = std::any_cast<MergedMesh>(&result)) {
-    mesh_ = merged->mesh;
-    scene_->SetMesh(mesh_);
-    QString text = tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
-                       .arg(mesh_->triangles.size())
-                       .arg(mesh_->vertices.size())
-                       .arg(merged->scans)
-                       .arg(merged->method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
-                       .arg(merged->voxel_m * 1000.0, 0, 'f', 1)
-                       .arg(merged->seconds, 0, 'f', 1);
-    if (merged->removed_moving) text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).").arg(merged->moving_points);
-    summary_->setText(text);
-  } else if (const auto* exported = std::any_cast<ExportedMesh>(&result)) {
-    summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported->triangles).arg(exported->path));
-  }
-  UpdateButtons();
+void MergePanel::OnMerged(const MergedMesh& merged) {
+  mesh_ = merged.mesh;
+  scene_->SetMesh(mesh_);
+  QString text = tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
+                     .arg(mesh_->triangles.size())
+                     .arg(mesh_->vertices.size())
+                     .arg(merged.scans)
+                     .arg(merged.method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
+                     .arg(merged.voxel_m * 1000.0, 0, 'f', 1)
+                     .arg(merged.seconds, 0, 'f', 1);
+  if (merged.removed_moving)
+    text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).")
+                .arg(merged.moving_points);
+  summary_->setText(text);
 }
 
 void MergePanel::ClearMesh() {

@@ -42,7 +42,8 @@ class MergePanel : public QWidget {
   const merge::Mesh* mesh() const { return mesh_.get(); }
 
  private:
-  void OnJobSucceeded(const QString& title, const std::any& result);
+  struct MergedMesh;  // the merge job's result
+  void OnMerged(const MergedMesh& merged);
   void ClearMesh();
   void ChooseExportFile();
   void SaveOptions() const;

@@ -14,6 +14,7 @@
 #include "ui/distance_overlay.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/project_document.h"
 #include "ui/network_panel.h"
 #include "ui/pair_panel.h"
 #include "ui/project_panels.h"
@@ -123,7 +124,9 @@ PairInspector::PairInspector(MainWindow* window) : QObject(window), window_(wind
 
   connect(window->jobs(), &JobRunner::Succeeded, this, &PairInspector::OnJobSucceeded);
   connect(window->jobs(), &JobRunner::Failed, this, &PairInspector::OnJobFailed);
-  connect(window, &MainWindow::ProjectChanged, this, &PairInspector::OnProjectChanged);
+  connect(window->document(), &ProjectDocument::Opened, this, &PairInspector::OnProjectOpened);
+  connect(window->document(), &ProjectDocument::ScansChanged, this, &PairInspector::OnProjectOpened);
+  connect(window->document(), &ProjectDocument::Changed, this, &PairInspector::OnProjectChanged);
   connect(panel_, &PairPanel::RunRequested, this, &PairInspector::RunPair);
   connect(panel_, &PairPanel::CancelRequested, this, &PairInspector::CancelPair);
   connect(panel_, &PairPanel::UseResultRequested, this, &PairInspector::UseResult);
@@ -134,10 +137,9 @@ void PairInspector::OnProjectChanged() {
   QStringList names;
   for (const io::ProjectScan& s : window_->project().scans) names << QString::fromStdString(s.name);
   panel_->SetScans(names);
-  const void* identity = window_->scans().empty() ? nullptr : window_->scans().data();
-  if (identity == scans_identity_) return;
-  // Another project (or the scans reloaded): what was computed belongs to the old one.
-  scans_identity_ = identity;
+}
+
+void PairInspector::OnProjectOpened() {
   panoramas_.clear();
   last_pair_.reset();
   panorama_->ShowMessage(tr("Select a scan in the scan list, or a cell of the confusion matrix, to see its panorama."));
@@ -164,9 +166,9 @@ void PairInspector::StartQueued() {
   });
 }
 
-bool PairInspector::Start(const QString& title,
-                          std::function<Expected<std::any>(ProgressSink&, const CancelToken&)> job) {
-  if (!window_->jobs()->Start(title, std::move(job))) return false;
+template <typename T>
+bool PairInspector::Start(const QString& title, JobRunner::Job<T> job, JobRunner::Done<T> done) {
+  if (!window_->jobs()->Start<T>(title, std::move(job), std::move(done))) return false;
   running_ = title;
   return true;
 }
@@ -182,14 +184,20 @@ bool PairInspector::ShowScan(const QString& name) {
     const int i = window_->project().FindScan(name.toStdString());
     if (i < 0 || i >= static_cast<int>(window_->scans().size())) return false;
     // A copy for the worker: core data are never shared between threads.
-    return Start(
-        tr("Panorama of %1").arg(name), [scan = window_->scans()[i], name, options = window_->RegistrationOptions()](
-                                            ProgressSink& progress, const CancelToken& cancel) {
+    return Start<PanoramaImage>(
+        tr("Panorama of %1").arg(name),
+        [scan = window_->scans()[i], name, options = window_->RegistrationOptions()](
+            ProgressSink& progress, const CancelToken& cancel) -> Expected<PanoramaImage> {
           progress.Report(0.1, "features of " + scan.name);
           Expected<ScanFeatures> features = Features(scan, options);
-          if (!features) return Expected<std::any>(features.error());
-          if (cancel.IsCancelled()) return Expected<std::any>(MakeError(ErrorCode::kCancelled, "cancelled"));
-          return Expected<std::any>(std::any(PanoramaImage{name, ReflectancePanorama(scan), features->keypoints}));
+          if (!features) return features.error();
+          if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "cancelled");
+          return PanoramaImage{name, ReflectancePanorama(scan), features->keypoints};
+        },
+        [this](PanoramaImage& pano) {
+          panoramas_[pano.scan] = pano;
+          panorama_->ShowScan(pano);
+          GrowPanoramaDockOnce();
         });
   });
   return true;
@@ -231,15 +239,27 @@ bool PairInspector::RunPair() {
     const Scan& cs = window_->scans()[c];
     const QString title =
         tr("Pair registration %1 → %2").arg(QString::fromStdString(cs.name), QString::fromStdString(ps.name));
-    const bool started =
-        Start(title, [parent = ps, child = cs, options](ProgressSink& progress, const CancelToken& cancel) {
+    const bool started = Start<PairJobResult>(
+        title,
+        [parent = ps, child = cs, options](ProgressSink& progress,
+                                           const CancelToken& cancel) -> Expected<PairJobResult> {
           Expected<pipeline::PairInspection> r = pipeline::InspectPair(parent, child, options, {}, progress, cancel);
-          if (!r) return Expected<std::any>(r.error());
+          if (!r) return r.error();
           PairJobResult out;
           out.parent = {QString::fromStdString(parent.name), ReflectancePanorama(parent), r->parent_features.keypoints};
           out.child = {QString::fromStdString(child.name), ReflectancePanorama(child), r->child_features.keypoints};
           out.inspection = std::move(*r);
-          return Expected<std::any>(std::any(std::move(out)));
+          return out;
+        },
+        [this](PairJobResult& pair) {
+          panoramas_[pair.parent.scan] = pair.parent;
+          panoramas_[pair.child.scan] = pair.child;
+          last_pair_ = pair.inspection;
+          panel_->SetRunning(false);
+          panel_->ShowResult(pair.inspection);
+          panorama_->ShowPair(pair.parent, pair.child, pair.inspection.matches, pair.inspection.coarse_inlier);
+          GrowPanoramaDockOnce();
+          ShowOverlay();
         });
     panel_->SetRunning(started);
     return started;
@@ -257,24 +277,8 @@ void PairInspector::CancelPair() {
   if (running_.startsWith(tr("Pair registration"))) window_->jobs()->Cancel();
 }
 
-void PairInspector::OnJobSucceeded(const QString& title, const std::any& result) {
-  if (title == running_) {
-    running_.clear();
-    if (const auto* pano = std::any_cast<PanoramaImage>(&result)) {
-      panoramas_[pano->scan] = *pano;
-      panorama_->ShowScan(*pano);
-      GrowPanoramaDockOnce();
-    } else if (const auto* pair = std::any_cast<PairJobResult>(&result)) {
-      panoramas_[pair->parent.scan] = pair->parent;
-      panoramas_[pair->child.scan] = pair->child;
-      last_pair_ = pair->inspection;
-      panel_->SetRunning(false);
-      panel_->ShowResult(pair->inspection);
-      panorama_->ShowPair(pair->parent, pair->child, pair->inspection.matches, pair->inspection.coarse_inlier);
-      GrowPanoramaDockOnce();
-      ShowOverlay();
-    }
-  }
+void PairInspector::OnJobSucceeded(const QString& title) {
+  if (title == running_) running_.clear();  // its result went to the callback it was started with
   StartQueued();
 }
 

@@ -8,12 +8,12 @@
 
 #include <QObject>
 #include <QString>
-#include <any>
 #include <functional>
 #include <map>
 #include <optional>
 
 #include "core/pipeline/inspect_pair.h"
+#include "ui/job_runner.h"
 #include "ui/panorama_view.h"
 
 class QDockWidget;
@@ -44,13 +44,15 @@ class PairInspector : public QObject {
   void CancelPair();
 
  private:
-  void OnProjectChanged();
-  void OnJobSucceeded(const QString& title, const std::any& result);
+  void OnProjectOpened();   // another project: what was computed belongs to the old one
+  void OnProjectChanged();  // the scan names offered in the pair panel
+  void OnJobSucceeded(const QString& title);
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   // Starts now, or keeps the request in *slot until the running job ends (the latest wins).
   void StartOrQueue(std::function<bool()>* slot, std::function<bool()> start);
   void StartQueued();  // after a job: the waiting pair first, else the waiting panorama
-  bool Start(const QString& title, std::function<Expected<std::any>(ProgressSink&, const CancelToken&)> job);
+  template <typename T>
+  bool Start(const QString& title, JobRunner::Job<T> job, JobRunner::Done<T> done);
   void ShowOverlay();
   void GrowPanoramaDockOnce();
   void UseResult();
@@ -61,7 +63,6 @@ class PairInspector : public QObject {
   QDockWidget* pano_dock_ = nullptr;
   bool grew_panorama_ = false;
   std::map<QString, PanoramaImage> panoramas_;  // computed panoramas by scan name (this project)
-  const void* scans_identity_ = nullptr;        // the window's scans these panoramas belong to
   std::optional<pipeline::PairInspection> last_pair_;
   QString running_;  // title of this inspector's running job
   std::function<bool()> queued_pair_, queued_scan_;

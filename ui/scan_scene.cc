@@ -15,12 +15,10 @@ namespace scanreg::ui {
 
 namespace {
 
-// Whether the drawing of `b` would be that of `a`: the same scans (by their point buffers: a
-// reloaded scan has new ones), poses, registered flags and drawn links.
-bool SameDrawing(const io::Project& a, const std::vector<const void*>& a_data, const io::Project& b,
-                 const std::vector<const void*>& b_data) {
-  if (a.file != b.file || a.scans.size() != b.scans.size() || a.links.size() != b.links.size() || a_data != b_data)
-    return false;
+// Whether the drawing of `b` would be that of `a` (with the same points): the same scans, poses,
+// registered flags and drawn links.
+bool SameDrawing(const io::Project& a, const io::Project& b) {
+  if (a.file != b.file || a.scans.size() != b.scans.size() || a.links.size() != b.links.size()) return false;
   for (std::size_t i = 0; i < a.scans.size(); ++i) {
     const io::ProjectScan &x = a.scans[i], &y = b.scans[i];
     if (x.name != y.name || x.registered != y.registered || x.world_from_scan.matrix() != y.world_from_scan.matrix())
@@ -33,29 +31,26 @@ bool SameDrawing(const io::Project& a, const std::vector<const void*>& a_data, c
   return true;
 }
 
-std::vector<const void*> PointBuffers(const std::vector<Scan>& scans) {
-  std::vector<const void*> data;
-  for (const Scan& s : scans) data.push_back(s.points.data());
-  return data;
-}
-
 }  // namespace
 
 ScanScene::ScanScene(View3d* view, QObject* parent) : QObject(parent), view_(view) {}
 
+void ScanScene::ScansReplaced(bool new_project) {
+  points_replaced_ = true;
+  new_project_ |= new_project;
+}
+
 void ScanScene::ShowScans(const io::Project& project, const std::vector<Scan>& scans) {
-  std::vector<const void*> data = PointBuffers(scans);
   // Nothing to redraw after a job that changed neither (an export, a merge): no GUI-thread stall;
   // unless another view (the pair overlay) has replaced the scene's actors meanwhile.
-  if (scans_ == &scans && SameDrawing(project, data, project_, data_) && ViewShowsScene()) return;
-  // Frame the scene again only when it is another one: another project, other scans, or the
-  // registration moved the origin (the first registered scan).
-  const bool same = project.file == project_.file && project.scans.size() == project_.scans.size() &&
-                    SceneOrigin(project) == SceneOrigin(project_) && scans_ != nullptr;
+  if (!points_replaced_ && scans_ == &scans && SameDrawing(project, project_) && ViewShowsScene()) return;
+  // Frame the scene again when it is another one: another project, or the registration moved the
+  // origin (the first registered scan).
+  const bool reframe = new_project_ || scans_ == nullptr || SceneOrigin(project) != SceneOrigin(project_);
   project_ = project;
   scans_ = &scans;
-  data_ = std::move(data);
-  Rebuild(!same);
+  points_replaced_ = new_project_ = false;
+  Rebuild(reframe);
 }
 
 void ScanScene::SetMesh(std::shared_ptr<const merge::Mesh> mesh) {

@@ -1,7 +1,8 @@
 // What the 3D view shows: the registered scans (colour per scan or by reflectance, per-scan
 // visibility, decimated or full resolution), the scanner positions and links, and the merged mesh;
-// scans and mesh can each be switched off. The main window calls ShowScans whenever its project or
-// scans change; the scene keeps a pointer to the scans until the next call (GUI thread only).
+// scans and mesh can each be switched off. The main window calls ShowScans whenever its project
+// changes, and ScansReplaced before that when the points are new; the scene keeps a pointer to the
+// scans until the next call (GUI thread only).
 #pragma once
 
 #include <QObject>
@@ -31,6 +32,9 @@ class ScanScene : public QObject {
   ScanScene(View3d* view, QObject* parent);
 
   void ShowScans(const io::Project& project, const std::vector<Scan>& scans);
+  // The scans' points were replaced (scans added, or another project: then the camera frames it
+  // again): the next ShowScans rebuilds the clouds.
+  void ScansReplaced(bool new_project);
   void SetMesh(std::shared_ptr<const merge::Mesh> mesh);  // null: no mesh
   void SetColouring(CloudColouring colouring);
   void SetFullResolution(bool full);
@@ -57,7 +61,8 @@ class ScanScene : public QObject {
   View3d* view_;
   io::Project project_;
   const std::vector<Scan>* scans_ = nullptr;
-  std::vector<const void*> data_;  // the drawn scans' point buffers
+  bool points_replaced_ = false;
+  bool new_project_ = false;
   std::shared_ptr<const merge::Mesh> mesh_;
   ScanActors actors_;
   vtkSmartPointer<vtkActor> mesh_actor_;

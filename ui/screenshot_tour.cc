@@ -93,7 +93,7 @@ merge::MergeOptions ScreenshotTour::DemoMerge() {
 ScreenshotTour::ScreenshotTour(MainWindow* window, QString dir, merge::MergeOptions merge)
     : QObject(window), window_(window), dir_(std::move(dir)), merge_(merge), views_(ScreenshotViews()) {
   connect(window_->jobs(), &JobRunner::Succeeded, this,
-          [this](const QString& title, const std::any&) { OnJobDone(title, true, QString()); });
+          [this](const QString& title) { OnJobDone(title, true, QString()); });
   connect(window_->jobs(), &JobRunner::Failed, this,
           [this](const QString& title, const QString& message, bool) { OnJobDone(title, false, message); });
 }

@@ -131,14 +131,15 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
   return read;
 }
 
-Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
-                                    ProgressSink& progress, const CancelToken& cancel) {
+Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
+                                       ProgressSink& progress, const CancelToken& cancel) {
   if (options.scan_files.empty()) {
     return MakeError(ErrorCode::kInvalidArgument, "a project needs at least one scan file");
   }
   io::Project project;
   project.file = std::filesystem::absolute(project_path);
-  if (auto scans = AppendScanFiles(project, options.scan_files, false, progress, cancel); !scans) return scans.error();
+  Expected<std::vector<Scan>> scans = AppendScanFiles(project, options.scan_files, options.keep_scans, progress, cancel);
+  if (!scans) return scans.error();
   for (const auto& [file, reference] :
        {std::make_pair(options.poses, false), std::make_pair(options.reference_poses, true)}) {
     if (!file) continue;
@@ -146,8 +147,8 @@ Expected<io::Project> CreateProject(const std::filesystem::path& project_path, c
     if (!poses) return poses.error();
     if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
   }
-  if (Status s = io::SaveProject(project, project_path); !s) return s.error();
-  return project;
+  if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return s.error();
+  return CreatedProject{std::move(project), std::move(*scans)};
 }
 
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,

@@ -21,6 +21,12 @@ struct CreateProjectOptions {
   // the scans' imported poses (ProjectScan::imported_pose), `reference_poses` the reference.
   std::optional<std::filesystem::path> poses;
   std::optional<std::filesystem::path> reference_poses;
+  bool keep_scans = false;  // return the scans read (the GUI shows them); else only the project
+};
+
+struct CreatedProject {
+  io::Project project;      // as saved (disk_digest set)
+  std::vector<Scan> scans;  // with keep_scans: in project order; else empty
 };
 
 // Every pose format `export-poses` writes, by extension: Stanford .conf, poses .json, poses .csv,
@@ -31,7 +37,7 @@ Expected<std::vector<io::NamedPose>> ReadPoseFile(const std::filesystem::path& p
 // project_path. Scan names are unique (a suffix is added on collision). A scan with no valid
 // point is an error naming it. Pose-file entries that match no scan are named in a warning (an
 // error when none matches).
-Expected<io::Project> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
+Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
                                     ProgressSink& progress, const CancelToken& cancel);
 
 // Reads scan files and appends their scans to `project` (the GUI's Add scans): each scan named

@@ -79,8 +79,14 @@ TEST(CreateProject, SavesTheProjectWithEveryScan) {
   NullProgress progress;
   CreateProjectOptions options;
   options.scan_files = {ab, ab};
+  options.keep_scans = true;  // as the GUI creates a project: the scans come back, named as in it
   auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
   ASSERT_TRUE(project.ok()) << project.error().message;
+  ASSERT_EQ(project->scans.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(project->scans[i].name, project->project.scans[i].name);
+    EXPECT_GT(project->scans[i].CountValid(), 0u);
+  }
   auto loaded = io::LoadProject(dir / "p.scanreg.json");
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   ASSERT_EQ(loaded->scans.size(), 4u);
@@ -139,14 +145,15 @@ TEST(CreateProject, HeaderPosesAreImportedAndASingleScanIsInPlace) {
   options.scan_files = {file};
   auto two = CreateProject(dir / "two.scanreg.json", options, progress, CancelToken());
   ASSERT_TRUE(two.ok()) << two.error().message;
-  EXPECT_EQ(io::ScanPoseState(two->scans[0]), io::PoseState::kImported);
-  EXPECT_EQ(io::ScanPoseState(two->scans[1]), io::PoseState::kUnregistered);
+  EXPECT_EQ(io::ScanPoseState(two->project.scans[0]), io::PoseState::kImported);
+  EXPECT_EQ(io::ScanPoseState(two->project.scans[1]), io::PoseState::kUnregistered);
+  EXPECT_TRUE(two->scans.empty());  // without keep_scans the points are dropped once checked
   // One scan alone is its own frame: usable by merge and export without registration.
   options.scan_files = {WritePtxFile(dir, "one.ptx", {raw})};
   auto one = CreateProject(dir / "one.scanreg.json", options, progress, CancelToken());
   ASSERT_TRUE(one.ok()) << one.error().message;
-  ASSERT_EQ(one->scans.size(), 1u);
-  EXPECT_EQ(io::ScanPoseState(one->scans[0]), io::PoseState::kRegistered);
+  ASSERT_EQ(one->project.scans.size(), 1u);
+  EXPECT_EQ(io::ScanPoseState(one->project.scans[0]), io::PoseState::kRegistered);
 }
 
 }  // namespace

@@ -34,6 +34,7 @@
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/merge_panel.h"
+#include "ui/project_document.h"
 #include "ui/project_panels.h"
 #include "ui/scan_scene.h"
 #include "ui/screenshot_tour.h"
@@ -247,7 +248,7 @@ class MergeProjectTest : public QObject {
     QVERIFY(!window.dirty());                           // merging does not change the project
 
     // An edit of the registration drops the mesh: it no longer matches the poses.
-    window.ApplyEdit(window.project(), false);
+    window.document()->Edit("move nothing", window.project());
     QVERIFY(window.mergePanel()->mesh() == nullptr);
     QVERIFY(window.scene()->MeshActor() == nullptr);
     QVERIFY(!window.mergePanel()->ExportMesh(out.filePath("stale.ply")));
