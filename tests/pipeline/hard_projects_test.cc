@@ -4,12 +4,17 @@
 // must fail where the geometric sources do the work, or the test would prove nothing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <random>
 
 #include "core/geometry/transform.h"
+#include "core/io/scan_file.h"
 #include "core/pipeline/register_project.h"
 #include "core/registration/plan_view.h"
 #include "core/simulate/project_sim.h"
+#include "tests/support/test_paths.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -131,6 +136,41 @@ TEST(HardProjects, ScansWithoutReflectance) {
   RegisterOptions sift_only;
   sift_only.features = FeatureSources::kSift;
   EXPECT_LE(CountRegistered(Register(scans, sift_only)), 1);
+}
+
+// Exported unorganized (a PLY of x y z intensity in shuffled order, as many programs write TLS
+// scans): the reader rebuilds each scan's angular grid, and the project registers as before.
+TEST(HardProjects, UnorganizedExports) {
+  const std::vector<Scan> organized = Simulate({4, 1000, 250, 5.0, true, 9});
+  ASSERT_EQ(organized.size(), 4u);
+  test::TempDir dir;
+  std::vector<Scan> scans;
+  std::mt19937 rng(11);
+  for (const Scan& s : organized) {
+    std::vector<std::size_t> order;
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.valid[i]) order.push_back(i);
+    std::shuffle(order.begin(), order.end(), rng);
+    const std::filesystem::path file = dir / (s.name + ".ply");
+    {
+      std::ofstream out(file);
+      out << "ply\nformat ascii 1.0\nelement vertex " << order.size()
+          << "\nproperty float x\nproperty float y\nproperty float z\nproperty float intensity\nend_header\n";
+      out.precision(7);
+      for (std::size_t i : order)
+        out << s.points[i].x() << ' ' << s.points[i].y() << ' ' << s.points[i].z() << ' ' << s.reflectance[i] << '\n';
+    }
+    NullProgress progress;
+    Expected<std::vector<Scan>> read = io::ReadScanFile(file, progress, CancelToken());
+    ASSERT_TRUE(read.ok()) << read.error().ToString();
+    ASSERT_EQ(read->size(), 1u);
+    Scan scan = std::move(read->front());
+    EXPECT_GT(scan.CountValid(), 0.9 * order.size()) << "the rebuilt grid keeps nearly every point";
+    scan.name = s.name;
+    scan.reference_world_from_scan = s.reference_world_from_scan;
+    scans.push_back(std::move(scan));
+  }
+  ExpectAllRegisteredAndNoWrongLink(scans, Register(scans, RegisterOptions{}));
 }
 
 // The plan-view search alone (no correspondence): two levelled scans 15 m apart, the best
