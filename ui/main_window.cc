@@ -12,7 +12,10 @@
 #include <QPainter>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QScrollArea>
+#include <QScreen>
 #include <QSettings>
+#include <QShortcut>
 #include <QStandardPaths>
 #include <QStatusBar>
 #include <QTimer>
@@ -74,7 +77,12 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   jobs_ = new JobRunner(this);
   doc_ = new ProjectDocument(this);
   connect(doc_, &ProjectDocument::Changed, this, &MainWindow::Refresh);
-  connect(doc_, &ProjectDocument::Opened, this, [this] { scene_->ScansReplaced(true); });
+  connect(doc_, &ProjectDocument::Opened, this, [this] {
+    scene_->ScansReplaced(true);
+    log_->clear();  // the log belongs to a project
+    log_->Header(tr("Project %1 (%n scan(s))", "", int(project().scans.size()))
+                     .arg(QString::fromStdString(project().file.string())));
+  });
   connect(doc_, &ProjectDocument::ScansChanged, this, [this] { scene_->ScansReplaced(false); });
   connect(doc_, &ProjectDocument::DirtyChanged, this, &MainWindow::UpdateTitle);
   connect(doc_, &ProjectDocument::RerunRequested, this, [this] {
@@ -99,7 +107,16 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   statusBar()->addPermanentWidget(progress_);
   statusBar()->addPermanentWidget(cancel_);
   connect(cancel_, &QPushButton::clicked, jobs_, &JobRunner::Cancel);
+  cancel_->setToolTip(tr("Cancel the running job (Esc)"));
+  auto* escape = new QShortcut(QKeySequence(Qt::Key_Escape), this);
+  escape->setObjectName("CancelShortcut");
+  connect(escape, &QShortcut::activated, jobs_, [this] {
+    if (!jobs_->busy()) return;
+    jobs_->Cancel();
+    statusBar()->showMessage(tr("Cancelling…"));
+  });
   connect(jobs_, &JobRunner::Started, this, [this](const QString& title) {
+    log_->Header(title);
     SetBusy(true);
     statusBar()->showMessage(title + "…");
   });
@@ -109,7 +126,13 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   });
   connect(jobs_, &JobRunner::Succeeded, this, [this](const QString& title) {
     SetBusy(false);
-    statusBar()->showMessage(title + tr(": done"), 5000);
+    // The run's summary when it has one (kept until the next job), else a short "done".
+    if (!last_summary_.isEmpty()) {
+      statusBar()->showMessage(last_summary_);
+    } else {
+      statusBar()->showMessage(title + tr(": done"), 5000);
+    }
+    last_summary_.clear();
   });
   connect(jobs_, &JobRunner::Failed, this, &MainWindow::OnJobFailed);
   inspector_ = new PairInspector(this);  // after the window's own job connections
@@ -126,7 +149,9 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   });
 
   statusBar()->showMessage(tr("No project open."));
-  resize(1400, 900);
+  // 1400 x 900, or less on a smaller screen (a 1366 x 768 laptop): never larger than it.
+  const QScreen* screen = QGuiApplication::primaryScreen();
+  resize(screen ? QSize(1400, 900).boundedTo(screen->availableSize()) : QSize(1400, 900));
   QSettings settings;
   restoreGeometry(settings.value("window/geometry").toByteArray());
   restoreState(settings.value("window/state").toByteArray());
@@ -159,7 +184,7 @@ void MainWindow::CreateDocks() {
   for (const auto& [widget, title] : docks) {
     auto* dock = new QDockWidget(title, this);
     dock->setObjectName(widget->objectName() + "Dock");
-    dock->setWidget(widget);
+    dock->setWidget(widget == merge_panel_ ? Scrollable(widget) : widget);
     addDockWidget(widget == log_ ? Qt::BottomDockWidgetArea : Qt::RightDockWidgetArea, dock);
     if (widget == merge_panel_) tabifyDockWidget(first_right, dock);  // a tab beside the scan list
     if (!first_right && widget != log_) first_right = dock;
@@ -239,8 +264,16 @@ void MainWindow::CreateMenus() {
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
   run->setShortcut(Qt::CTRL | Qt::Key_R);
   QAction* edit_pose = reg->addAction(tr("Edit scan &pose…"), this, [this] { EditSelectedScanPose(); });
+  QAction* release = reg->addAction(tr("Re&lease hand placement"), this, [this] {
+    const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
+    if (!item) {
+      ShowError(tr("Release hand placement"), tr("Select a scan placed by hand in the scan list first."));
+      return;
+    }
+    ReleaseHandPlacement(item->text());
+  });
   QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
-  project_actions_ = {save, save_as, run, add, report, edit_pose, settings};
+  project_actions_ = {save, save_as, run, add, report, edit_pose, release, settings};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
@@ -319,7 +352,10 @@ bool MainWindow::RegisterProject() {
     if (!r) return r.error();
     return Registered{std::move(project), r->confusion};
       },
-      [this](Registered& r) { doc_->ApplyRegistration(tr("register the scans"), std::move(r.project), r.confusion); });
+      [this](Registered& r) {
+        doc_->ApplyRegistration(tr("register the scans"), std::move(r.project), r.confusion);
+        ReportRegistration();
+      });
 }
 
 void MainWindow::SaveProjectAs() {
@@ -419,6 +455,16 @@ bool MainWindow::SetScanPose(const QString& scan, const Eigen::Isometry3d& world
   return true;
 }
 
+bool MainWindow::ReleaseHandPlacement(const QString& scan) {
+  io::Project after = project();
+  if (Status s = pipeline::ReleaseHandPlacement(scan.toStdString(), after); !s) {
+    ShowError(tr("Release hand placement"), QString::fromStdString(s.error().message));
+    return false;
+  }
+  doc_->Edit(tr("release the hand placement of %1").arg(scan), std::move(after));
+  return true;
+}
+
 PoseDialog* MainWindow::EditSelectedScanPose() {
   const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
   const int s = item ? project().FindScan(item->text().toStdString()) : -1;
@@ -447,6 +493,24 @@ bool MainWindow::UsePairResult(const io::LinkRecord& link) {
                                 QString::fromStdString(link.method));
   doc_->Edit(text, std::move(after));
   return true;
+}
+
+void MainWindow::ReportRegistration() {
+  int registered = 0, on_hand = 0;
+  QStringList left_out;
+  const std::vector<bool> rests = io::RestsOnHandPlacement(project());
+  for (std::size_t i = 0; i < project().scans.size(); ++i) {
+    const io::ProjectScan& s = project().scans[i];
+    registered += s.registered;
+    on_hand += s.registered && rests[i];
+    if (!s.registered)
+      left_out << QString::fromStdString(s.name) + " (" + QString::fromStdString(s.unregistered_reason) + ")";
+  }
+  QString summary = tr("Registered %1 of %2 scans").arg(registered).arg(project().scans.size());
+  if (on_hand > 0) summary += tr("; %n rest(s) on a hand placement", "", on_hand);
+  if (!left_out.isEmpty()) summary += tr("; not registered: %1").arg(left_out.join("; "));
+  LogInfo(summary.toStdString());
+  last_summary_ = summary;
 }
 
 void MainWindow::OnJobFailed(const QString& title, const QString& message, bool cancelled) {
@@ -600,6 +664,17 @@ bool MainWindow::ExportReport(const QString& dir) {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  if (jobs_->busy()) {
+    QMessageBox box(QMessageBox::Question, tr("A job is running"),
+                    tr("%1 is still running. Cancel it and close?").arg(statusBar()->currentMessage()),
+                    QMessageBox::Yes | QMessageBox::No, this);
+    box.setObjectName("CloseDuringJobDialog");
+    if (box.exec() != QMessageBox::Yes) {
+      event->ignore();
+      return;
+    }
+    jobs_->Cancel();  // the runner joins the worker when the window goes
+  }
   if (!MaybeSaveChanges()) {
     event->ignore();
     return;
@@ -614,6 +689,15 @@ void MainWindow::ShowAbout() {
   QMessageBox::about(
       this, tr("About scanreg"),
       tr("<b>scanreg</b> %1<br>Registration of terrestrial laser scans.").arg(QApplication::applicationVersion()));
+}
+
+QWidget* MainWindow::Scrollable(QWidget* content) {
+  auto* area = new QScrollArea;
+  area->setObjectName(content->objectName() + "Scroll");
+  area->setWidget(content);
+  area->setWidgetResizable(true);
+  area->setFrameShape(QFrame::NoFrame);
+  return area;
 }
 
 bool MainWindow::SaveScreenshot(const QString& path) {

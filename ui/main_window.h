@@ -78,6 +78,9 @@ class MainWindow : public QMainWindow {
   void SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject);
   // Places a scan by hand (pipeline::SetScanPose); false, with a dialog, when refused.
   bool SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents);
+  // Lets the registration place a scan placed by hand (Register all keeps hand placements); false,
+  // with a dialog, when the scan was not placed by hand.
+  bool ReleaseHandPlacement(const QString& scan);
   // Registration → Edit scan pose…: opens the pose dialog for the scan selected in the scan list
   // (window-modal, does not block); returns it (null when no scan is selected), for tests.
   PoseDialog* EditSelectedScanPose();
@@ -97,6 +100,10 @@ class MainWindow : public QMainWindow {
   ScanScene* scene() const { return scene_; }
   MergePanel* mergePanel() const { return merge_panel_; }
 
+  // A dock's content in a scroll area: a tall panel (pair evidence, merge options) scrolls instead
+  // of setting the window's minimum height (the window fits 1366 x 768).
+  static QWidget* Scrollable(QWidget* content);
+
   // The window as shown, including the VTK view's frame (null on failure); and saved as a PNG.
   QImage Screenshot();
   bool SaveScreenshot(const QString& path);
@@ -109,12 +116,14 @@ class MainWindow : public QMainWindow {
   void CreateDocks();
   void OnProjectLoaded(io::Project project, std::vector<Scan> scans);  // opened, created or simulated
   void UpdateTitle();
+  void ReportRegistration();  // the run's summary: log, and the status bar until the next job
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   void SetBusy(bool busy);
   void ShowAbout();
   void FillRecentMenu(QMenu* menu);
 
   ProjectDocument* doc_ = nullptr;
+  QString last_summary_;  // of the job that just ended
   JobRunner* jobs_ = nullptr;
   View3d* view3d_ = nullptr;
   ScanListPanel* scan_list_ = nullptr;

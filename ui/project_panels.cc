@@ -1,9 +1,12 @@
 #include "ui/project_panels.h"
 
+#include <QDateTime>
 #include <QHeaderView>
+#include <QTime>
 #include <cmath>
 
 #include "core/geometry/transform.h"
+#include "core/io/project_tree.h"
 
 namespace scanreg::ui {
 namespace {
@@ -19,9 +22,10 @@ QTableWidgetItem* Item(const QString& text, Qt::Alignment align = Qt::AlignRight
 
 ScanListPanel::ScanListPanel(QWidget* parent) : QTableWidget(parent) {
   setObjectName("ScanList");
-  setColumnCount(8);
-  setHorizontalHeaderLabels({tr("Scan"), tr("Size"), tr("Points"), tr("Status"), tr("X (m)"), tr("Y (m)"), tr("Z (m)"),
-                             tr("Error vs reference")});
+  setColumnCount(11);
+  setHorizontalHeaderLabels({tr("Scan"), tr("Size"), tr("Points"), tr("Status"), tr("Parent"), tr("Link"),
+                             tr("Reason"), tr("X (m)"), tr("Y (m)"), tr("Z (m)"), tr("Error vs reference")});
+  setTextElideMode(Qt::ElideRight);  // long reasons: the tooltip holds the whole text
   verticalHeader()->hide();
   horizontalHeader()->setStretchLastSection(true);
   setSelectionBehavior(QAbstractItemView::SelectRows);
@@ -43,6 +47,7 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
   setRowCount(static_cast<int>(project.scans.size()));
   // Errors relative to the root, so that the datum of the registration does not matter.
   const int root = project.root ? project.FindScan(*project.root) : -1;
+  const std::vector<bool> on_hand = io::RestsOnHandPlacement(project);
   for (int i = 0; i < rowCount(); ++i) {
     const io::ProjectScan& s = project.scans[i];
     const Scan* scan = i < static_cast<int>(scans.size()) ? &scans[i] : nullptr;
@@ -60,13 +65,48 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
                           : state == io::PoseState::kImported   ? QColor(40, 90, 170)
                                                                 : QColor(20, 140, 60));
     if (state == io::PoseState::kManual) {
-      status->setToolTip(tr("Placed by hand (Registration → Edit scan pose): no link evidence"));
+      status->setToolTip(tr("Placed by hand (Registration → Edit scan pose): no link evidence; Register all keeps "
+                            "it (Registration → Release hand placement lets the registration place it)"));
     } else if (state == io::PoseState::kImported) {
       status->setToolTip(tr("Pose read from a file (pose file or the scan's header): no link evidence of ours"));
+    } else if (state == io::PoseState::kRegistered && on_hand[i]) {
+      status->setText(tr("on a hand placement"));
+      status->setForeground(QColor(200, 130, 0));
+      status->setToolTip(tr("Registered through a scan placed by hand: its pose carries that placement's error"));
     }
     setItem(i, 3, status);
+    // The link that placed the scan (its tree link), or the last attempt when none did.
+    const io::LinkRecord* tree = nullptr;
+    const io::LinkRecord* failed = nullptr;
+    for (const io::LinkRecord& l : project.links) {
+      if (l.child != s.name) continue;
+      if (io::IsTreeLink(l)) tree = &l;
+      if (l.status == io::LinkStatus::kFailed) failed = &l;
+    }
+    const io::LinkRecord* link = tree ? tree : failed;
+    setItem(i, 4, Item(link ? QString::fromStdString(link->parent) : "—", Qt::AlignLeft | Qt::AlignVCenter));
+    QString quality = "—", quality_tip;
+    if (link) {
+      quality = QString::fromStdString(io::LinkStatusName(link->status));
+      if (link->status != io::LinkStatus::kFailed || link->rms_m > 0.0)  // a failed pair may never have been measured
+        quality += QString(", %1 mm, %2 %").arg(link->rms_m * 1000, 0, 'f', 1).arg(link->overlap * 100, 0, 'f', 0);
+      quality_tip = tr("%1 → %2 (%3): RMS %4 mm, overlap %5 %, %6 consistent correspondences")
+                        .arg(QString::fromStdString(link->child), QString::fromStdString(link->parent),
+                             QString::fromStdString(link->method))
+                        .arg(link->rms_m * 1000, 0, 'f', 1)
+                        .arg(link->overlap * 100, 0, 'f', 1)
+                        .arg(link->consistent);
+    }
+    QTableWidgetItem* quality_item = Item(quality, Qt::AlignLeft | Qt::AlignVCenter);
+    quality_item->setToolTip(quality_tip);
+    setItem(i, 5, quality_item);
+    QString reason = QString::fromStdString(s.registered ? (link && link == tree ? link->reason : std::string())
+                                                         : s.unregistered_reason);
+    QTableWidgetItem* reason_item = Item(reason.isEmpty() ? "—" : reason, Qt::AlignLeft | Qt::AlignVCenter);
+    reason_item->setToolTip(reason);  // the full text; the cell may be narrower
+    setItem(i, 6, reason_item);
     const Eigen::Vector3d t = s.world_from_scan.translation();
-    for (int k = 0; k < 3; ++k) setItem(i, 4 + k, Item(QString::number(t[k], 'f', 3)));
+    for (int k = 0; k < 3; ++k) setItem(i, 7 + k, Item(QString::number(t[k], 'f', 3)));
     QString error = "-";
     if (s.registered && root >= 0 && s.reference_world_from_scan && project.scans[root].reference_world_from_scan) {
       const Eigen::Isometry3d est = project.scans[root].world_from_scan.inverse() * s.world_from_scan;
@@ -75,9 +115,11 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
       const PoseError e = ComparePoses(est, ref);
       error = QString("%1 mm, %2°").arg(e.position_m * 1000, 0, 'f', 1).arg(e.angle_rad * 180 / M_PI, 0, 'f', 4);
     }
-    setItem(i, 7, Item(error, Qt::AlignLeft | Qt::AlignVCenter));
+    setItem(i, 10, Item(error, Qt::AlignLeft | Qt::AlignVCenter));
   }
   resizeColumnsToContents();
+  for (int c : {5, 6})  // link figures and reasons can be long: the tooltip holds the whole text
+    if (columnWidth(c) > 280) setColumnWidth(c, 280);
 }
 
 ConfusionPanel::ConfusionPanel(QWidget* parent) : QTableWidget(parent) { setObjectName("ConfusionMatrix"); }
@@ -116,6 +158,12 @@ LogPanel::LogPanel(QWidget* parent) : QPlainTextEdit(parent) {
   setMaximumBlockCount(5000);
 }
 
-void LogPanel::Append(const QString& level, const QString& message) { appendPlainText(level + ": " + message); }
+void LogPanel::Append(const QString& level, const QString& message) {
+  appendPlainText(QTime::currentTime().toString("HH:mm:ss") + "  " + level + ": " + message);
+}
+
+void LogPanel::Header(const QString& title) {
+  appendPlainText(QString("── %1 — %2 ──").arg(title, QDateTime::currentDateTime().toString("yyyy-MM-dd HH:mm:ss")));
+}
 
 }  // namespace scanreg::ui

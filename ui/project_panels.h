@@ -43,7 +43,8 @@ class LogPanel : public QPlainTextEdit {
 
  public:
   explicit LogPanel(QWidget* parent = nullptr);
-  void Append(const QString& level, const QString& message);
+  void Append(const QString& level, const QString& message);  // with the time of day
+  void Header(const QString& title);  // a line that starts a run: "── Registering — 2026-12-02 04:55:12 ──"
 };
 
 }  // namespace scanreg::ui

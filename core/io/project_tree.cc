@@ -32,4 +32,13 @@ std::vector<int> ScansRegisteredThrough(const Project& project, int root) {
   return out;
 }
 
+std::vector<bool> RestsOnHandPlacement(const Project& project) {
+  std::vector<bool> out(project.scans.size(), false);
+  for (std::size_t m = 0; m < project.scans.size(); ++m) {
+    if (!project.scans[m].registered || !project.scans[m].manual_pose) continue;
+    for (int i : ScansRegisteredThrough(project, static_cast<int>(m))) out[i] = project.scans[i].registered;
+  }
+  return out;
+}
+
 }  // namespace scanreg::io

@@ -19,4 +19,8 @@ std::vector<int> OrderedScanIndices(const Project& project);
 // `root` and every scan registered through it along tree links (root first).
 std::vector<int> ScansRegisteredThrough(const Project& project, int root);
 
+// Per scan: its pose rests on a hand placement — it was placed by hand, or registered through a
+// scan that was (issue 14: such a pose is shown as such everywhere, never as plain "registered").
+std::vector<bool> RestsOnHandPlacement(const Project& project);
+
 }  // namespace scanreg::io

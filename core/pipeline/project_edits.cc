@@ -99,4 +99,17 @@ Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_
   return Status::Ok();
 }
 
+Status ReleaseHandPlacement(const std::string& scan, io::Project& project) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  io::ProjectScan& ps = project.scans[s];
+  if (!ps.manual_pose) {
+    return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' was not placed by hand; nothing to release");
+  }
+  ps.manual_pose = false;
+  ps.registered = false;
+  ps.unregistered_reason = "released from its hand placement; register to place it";
+  return Status::Ok();
+}
+
 }  // namespace scanreg::pipeline

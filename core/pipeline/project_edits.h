@@ -26,4 +26,9 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project);
 Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents,
                    io::Project& project);
 
+// Lets the registration place a scan that was placed by hand: it keeps its pose as the starting
+// point but is no longer held (unregistered until the next registration). Error when it was not
+// placed by hand.
+Status ReleaseHandPlacement(const std::string& scan, io::Project& project);
+
 }  // namespace scanreg::pipeline

@@ -253,12 +253,22 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
   }
   Expected<ProjectRegistration> result = RegisterScans(scans, overrides, rejected, options, progress, cancel);
   if (!result) return result.error();
-  if (anchors > 0) KeepImportedPoses(project, anchor, &*result);
+  // The user's hand placements are decisions (issue 14): kept as placed, and the scans registered
+  // through one are placed from it (they rest on it), like scans below an imported pose.
+  std::vector<bool> locked = anchor;
+  int hand_placed = 0;
+  for (std::size_t i = 0; i < project.scans.size(); ++i)
+    if (project.scans[i].registered && project.scans[i].manual_pose) locked[i] = true, ++hand_placed;
+  if (anchors + hand_placed > 0) KeepImportedPoses(project, locked, &*result);
   const io::Project before = project;
   ApplyRegistration(*result, project);
   for (std::size_t i = 0; i < project.scans.size(); ++i) {
     io::ProjectScan& ps = project.scans[i];
     const io::ProjectScan& old = before.scans[i];
+    if (locked[i] && old.manual_pose) {
+      ps.manual_pose = true;
+      LogInfo("scan '" + ps.name + "' keeps its hand placement (Release hand placement lets the registration place it)");
+    }
     if (ps.registered && !anchor[i]) ps.imported_pose = false;    // re-estimated
     if (!ps.registered && old.registered && old.imported_pose) {  // the file's pose is not thrown away
       LogWarning("scan '" + ps.name + "' could not be registered (" + ps.unregistered_reason +

@@ -6,6 +6,8 @@
 #include <cmath>
 
 #include "core/geometry/transform.h"
+#include "core/pipeline/project_edits.h"
+#include "core/io/project_tree.h"
 #include "core/simulate/project_sim.h"
 #include "tests/support/test_paths.h"
 
@@ -115,6 +117,66 @@ TEST_F(StreetProject, GlobalRegistrationKeepsTheAccuracyAndReportsEveryLink) {
     EXPECT_FALSE(g.down_weighted) << g.parent << "-" << g.child << ": no wrong link in this project";
     EXPECT_LT(g.translation_after_m, 0.02) << g.parent << "-" << g.child;
   }
+}
+
+// Issue 14: Register all keeps the user's decisions — a hand placement stays where the user put it
+// (scans registered through it rest on it and are marked so), an accepted link stays accepted.
+TEST_F(StreetProject, RegisterAllKeepsAHandPlacementAndMarksTheScansThatRestOnIt) {
+  std::vector<Scan> scans = *scans_;
+  io::Project project;
+  for (Scan& s : scans) {
+    s.world_from_scan = s.name == "s01" ? *s.reference_world_from_scan : Eigen::Isometry3d::Identity();
+    io::ProjectScan ps;
+    ps.name = s.name;
+    ps.world_from_scan = s.world_from_scan;
+    project.scans.push_back(ps);
+  }
+  project.root = "s01";
+  // s03 placed by hand, 0.4 m and 3 degrees off the truth.
+  const int hand = 2;
+  const Eigen::Isometry3d placed = *scans[hand].reference_world_from_scan *
+                                   Eigen::Translation3d(0.4, 0.0, 0.0) *
+                                   Eigen::AngleAxisd(3.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+  ASSERT_TRUE(SetScanPose("s03", placed, false, project).ok());
+  scans[hand].world_from_scan = placed;
+  project.scans[3].parent_override = "s03";  // s04 registered through the hand-placed scan
+  io::LinkRecord accepted;
+  accepted.parent = "s04", accepted.child = "s05", accepted.user_accepted = true;
+  project.links.push_back(accepted);
+  NullProgress progress;
+  Expected<ProjectRegistration> r = RegisterProjectScans(project, scans, RegisterOptions(), progress, CancelToken());
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  const io::ProjectScan& s03 = project.scans[hand];
+  EXPECT_TRUE(s03.registered && s03.manual_pose);
+  EXPECT_TRUE(s03.world_from_scan.isApprox(placed, 1e-12)) << "the hand placement was moved";
+  const std::vector<bool> rests = io::RestsOnHandPlacement(project);
+  EXPECT_TRUE(rests[hand]);
+  EXPECT_TRUE(rests[3]) << "s04 hangs off s03";
+  int resting = 0;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    ASSERT_TRUE(project.scans[i].registered) << scans[i].name << ": " << project.scans[i].unregistered_reason;
+    const PoseError e = ComparePoses(project.scans[i].world_from_scan, *scans[i].reference_world_from_scan);
+    if (rests[i]) {
+      ++resting;
+      EXPECT_GT(e.position_m, 0.1) << scans[i].name << " rests on the hand placement and carries its offset";
+    } else {
+      EXPECT_LT(e.position_m, 0.02) << scans[i].name;
+    }
+  }
+  EXPECT_LT(resting, static_cast<int>(scans.size()));  // the root does not rest on s03
+  bool still_accepted = false;
+  for (const io::LinkRecord& l : project.links)
+    still_accepted |= l.parent == "s04" && l.child == "s05" && l.user_accepted;
+  EXPECT_TRUE(still_accepted);
+
+  // Released, the scan is placed by the registration again, within 2 cm of the truth.
+  ASSERT_TRUE(ReleaseHandPlacement("s03", project).ok());
+  EXPECT_FALSE(ReleaseHandPlacement("s03", project).ok());
+  Expected<ProjectRegistration> again =
+      RegisterProjectScans(project, scans, RegisterOptions(), progress, CancelToken());
+  ASSERT_TRUE(again.ok());
+  EXPECT_FALSE(project.scans[hand].manual_pose);
+  EXPECT_LT(ComparePoses(project.scans[hand].world_from_scan, *scans[hand].reference_world_from_scan).position_m, 0.02);
 }
 
 TEST(RegisterProjectTest, ParentOverrideChangesTheChain) {

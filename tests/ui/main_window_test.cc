@@ -2,6 +2,7 @@
 // registered on the worker thread, cancel, save.
 #include <QVTKOpenGLNativeWidget.h>
 #include <QComboBox>
+#include <QDockWidget>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QLineEdit>
@@ -132,6 +133,47 @@ class MainWindowTest : public QObject {
     QVERIFY(window.dirty());
     window.undoStack()->undo();
     QCOMPARE(window.project().settings.at("register.fine"), std::string("em"));
+  }
+
+  void FitsA1366By768LaptopWithEveryViewShown() {
+    MainWindow window;
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTemporaryDir dir;
+    QVERIFY(window.OpenDemoProject(dir.filePath("demo")));
+    QVERIFY(WaitForJob(window, 300000));
+    window.resize(1366, 768);
+    QTest::qWait(200);
+    const QSize hint = window.minimumSizeHint();
+    QVERIFY2(window.width() <= 1366 && window.height() <= 768,
+             qPrintable(QString("window %1 x %2 (minimum %3 x %4)")
+                            .arg(window.width())
+                            .arg(window.height())
+                            .arg(hint.width())
+                            .arg(hint.height())));
+    QVERIFY2(window.view3d()->width() >= 300 && window.view3d()->height() >= 200,
+             qPrintable(QString("3D view %1 x %2").arg(window.view3d()->width()).arg(window.view3d()->height())));
+    for (QDockWidget* dock : window.findChildren<QDockWidget*>()) {
+      if (dock->isHidden() || window.tabifiedDockWidgets(dock).contains(dock)) continue;
+      if (!dock->visibleRegion().isEmpty())
+        QVERIFY2(dock->width() > 50 && dock->height() > 50, qPrintable(dock->objectName()));
+    }
+  }
+
+  void EscapeCancelsTheRunningJob() {
+    MainWindow window;
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QTemporaryDir dir;
+    window.activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(&window));
+    QVERIFY(window.OpenDemoProject(dir.filePath("demo")));
+    QVERIFY(window.jobs()->busy());
+    QTest::keyClick(&window, Qt::Key_Escape);
+    bool cancelled = false;
+    QVERIFY(!WaitForJob(window, 300000, &cancelled));
+    QVERIFY(cancelled);
+    QVERIFY(window.project().scans.empty());  // nothing half-loaded
   }
 
   void SaveRefusesALockedOrChangedProjectAndOffersReload() {
