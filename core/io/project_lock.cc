@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/common/log.h"
+
 namespace scanreg::io {
 namespace {
 
@@ -44,6 +46,13 @@ Expected<ProjectLock> ProjectLock::Acquire(const std::filesystem::path& project,
                                                 " (is the folder writable?)");
     }
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      if (errno != EWOULDBLOCK && errno != EINTR) {  // a file system without locks (some network mounts)
+        const std::string why = std::strerror(errno);
+        ::close(fd);
+        LogWarning("cannot lock '" + path.string() + "' (" + why +
+                   "); make sure no other run writes project '" + project.string() + "' meanwhile");
+        return ProjectLock(std::filesystem::path(), -1);
+      }
       ::close(fd);
       const auto [pid, holder] = ReadLock(path);
       return MakeError(ErrorCode::kConflict,

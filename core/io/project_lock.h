@@ -2,7 +2,8 @@
 // will save a project holds a lock on a file beside it, ".<name>.lock" (flock; the file says which
 // process and what it does); a second writer refuses at once with that information instead of
 // silently overwriting the first one's result minutes later. The kernel drops the lock of a
-// process that no longer runs (kill -9), so the next run takes it.
+// process that no longer runs (kill -9), so the next run takes it. On a file system without locks
+// (some network mounts) Acquire warns and returns a lock that holds nothing.
 #pragma once
 
 #include <filesystem>
