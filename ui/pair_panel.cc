@@ -163,11 +163,14 @@ void PairPanel::ShowResult(const pipeline::PairInspection& result) {
   SetField("reliable", QString::number(l.reliable));
   SetField("inliers", QString::number(l.ransac_inliers));
   SetField("consistent", QString::number(l.consistent));
-  SetField("rms", Mm(l.rms_m));
-  SetField("overlap", Percent(l.overlap));
-  SetField("conflict", Percent(l.conflict));
-  SetField("moving", Percent(l.moving));
-  SetField("iterations", QString::number(l.iterations));
+  // A pair that failed before its surfaces were compared measured no RMS or overlap: "—", not 0.
+  const bool measured = l.status != io::LinkStatus::kFailed || l.rms_m > 0.0 || l.overlap > 0.0;
+  const QString none = QStringLiteral("—");
+  SetField("rms", measured ? Mm(l.rms_m) : none);
+  SetField("overlap", measured ? Percent(l.overlap) : none);
+  SetField("conflict", measured ? Percent(l.conflict) : none);
+  SetField("moving", measured ? Percent(l.moving) : none);
+  SetField("iterations", measured ? QString::number(l.iterations) : none);
   SetField("time", QString("%1 s").arg(l.seconds, 0, 'f', 2));
   SetField("error", result.reference_error ? ErrorText(*result.reference_error) : tr("no reference poses"));
   SetField("coarse_error",

@@ -60,6 +60,23 @@ class PairInspectorTest : public QObject {
   Q_OBJECT
 
  private slots:
+  // Issue 14: a pair that failed before its surfaces were compared shows "—", not "0.0 mm".
+  void AFailedPairShowsADashForWhatItNeverMeasured() {
+    scanreg::ui::PairPanel panel;
+    scanreg::pipeline::PairInspection r;
+    r.result.link.status = scanreg::io::LinkStatus::kFailed;
+    r.result.link.reason = "only 6 of 17 correspondences agree on a pose";
+    panel.ShowResult(r);
+    QCOMPARE(panel.Evidence("rms"), QString("—"));
+    QCOMPARE(panel.Evidence("overlap"), QString("—"));
+    QCOMPARE(panel.Evidence("reason"), QString::fromStdString(r.result.link.reason));
+    r.result.link.rms_m = 0.05;  // failed after measuring (a high RMS): the figures are shown
+    r.result.link.overlap = 0.3;
+    panel.ShowResult(r);
+    QCOMPARE(panel.Evidence("rms"), QString("50.0 mm"));
+    QCOMPARE(panel.Evidence("overlap"), QString("30.0 %"));
+  }
+
   void initTestCase() {
     window_ = new MainWindow;
     window_->show();
