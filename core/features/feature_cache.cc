@@ -196,7 +196,8 @@ Expected<ScanFeatures> ParseFeatureCacheEntry(const std::string& in, std::uint64
     k = Keypoint{values[0], values[1], values[2], values[3], values[4]};
   }
   f.descriptors.resize(n * kSiftDescriptorSize);
-  std::memcpy(f.descriptors.data(), in.data() + pos, f.descriptors.size() * sizeof(float));
+  if (n > 0)  // memcpy from or to a null pointer is undefined even for 0 bytes (UBSan)
+    std::memcpy(f.descriptors.data(), in.data() + pos, f.descriptors.size() * sizeof(float));
   return f;
 }
 

@@ -1,5 +1,6 @@
 #include "core/io/ptx.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -23,6 +24,8 @@ Error Cancelled(const std::filesystem::path& path) {
   return MakeError(ErrorCode::kCancelled, path.string() + ": cancelled");
 }
 
+constexpr int kMaxHeaderNumbers = 4;  // a PTX header line holds 1 (grid size), 3 (position, axes) or 4 (matrix row)
+
 // Reads one header line of exactly n numbers.
 Status ReadHeaderLine(LineReader& lines, const std::filesystem::path& path, int n, const char* what, double* out) {
   std::string_view line;
@@ -31,7 +34,11 @@ Status ReadHeaderLine(LineReader& lines, const std::filesystem::path& path, int 
                     std::string("the file ends inside a scan header (expected the ") + what +
                         "); the file is truncated, export it again");
   }
-  const NumberParse r = ParseNumbers(line, out, n + 1);
+  // One number more than expected is parsed to tell "too many" apart: into a buffer with room for
+  // it (out holds exactly n; ASan found the extra number written past it).
+  double parsed[kMaxHeaderNumbers + 1];
+  if (n < 1 || n > kMaxHeaderNumbers) return ParseErr(path, lines.line_number(), "internal: bad header width");
+  const NumberParse r = ParseNumbers(line, parsed, n + 1);
   if (r.status == ParseStatus::kBadToken) {
     return ParseErr(path, lines.line_number(),
                     QuoteToken(r.token) + " is not a number (expected the " + what +
@@ -45,6 +52,7 @@ Status ReadHeaderLine(LineReader& lines, const std::filesystem::path& path, int 
                     "expected " + std::to_string(n) + " number" + (n > 1 ? "s" : "") + " (the " + what + "), found " +
                         std::to_string(r.count) + "; the scan header is malformed");
   }
+  std::copy(parsed, parsed + n, out);
   return Status::Ok();
 }
 

@@ -202,11 +202,19 @@ std::vector<FuzzTarget> MakeTargets(const fs::path& work_dir) {
   // A feature cache entry of a textured scan, parsed for that scan under its key.
   FuzzTarget cache{"feature-cache", ".feat", {}, nullptr};
   {
-    Scan textured = SeedScan("t", 48, 96, 0.2);
-    for (std::size_t i = 0; i < textured.size(); ++i) textured.reflectance[i] = float(((i / 5) % 2) ^ ((i / 480) % 2));
+    // Blobs of several sizes on a 120 x 360 grid: SIFT finds keypoints (an entry without any would
+    // leave most of the parser unexercised).
+    Scan textured = SeedScan("t", 120, 360, 0.2);
+    for (int r = 0; r < textured.rows; ++r)
+      for (int c = 0; c < textured.cols; ++c) {
+        const double blobs = std::sin(c * 0.21) * std::cos(r * 0.17) + 0.5 * std::sin(c * 0.05 + r * 0.09);
+        textured.reflectance[std::size_t(r) * textured.cols + c] = float(0.5 + 0.3 * blobs);
+      }
     const SiftOptions options;
     const fs::path dir = seeds / "cache";
-    if (!LoadOrDetectFeatures(textured, options, dir).ok()) throw std::runtime_error("seed feature cache");
+    Expected<ScanFeatures> detected = LoadOrDetectFeatures(textured, options, dir);
+    if (!detected.ok() || detected->keypoints.size() < 10)
+      throw std::runtime_error("seed feature cache: too few keypoints to exercise the parser");
     cache.seeds.push_back(Slurp(FeatureCachePath(textured, options, dir)));
     const std::uint64_t key = FeatureCacheKey(textured, options);
     cache.read = [textured, key](const fs::path& f, bool* ok) {
