@@ -90,7 +90,7 @@ PairInspector::PairInspector(MainWindow* window) : QObject(window), window_(wind
   pano_dock_ = pano_dock;
   auto* pair_dock = new QDockWidget(tr("Pair registration"), window);
   pair_dock->setObjectName("PairPanelDock");
-  pair_dock->setWidget(MainWindow::Scrollable(panel_));
+  pair_dock->setWidget(panel_);
   window->addDockWidget(Qt::LeftDockWidgetArea, pair_dock);
 
   ScanListPanel* list = window->scanList();

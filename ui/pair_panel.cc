@@ -3,6 +3,7 @@
 #include <QComboBox>
 #include <QFormLayout>
 #include <QGroupBox>
+#include <QScrollArea>
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
@@ -92,8 +93,14 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
   layout->addLayout(choose);
   layout->addLayout(buttons);
   layout->addLayout(buttons2);
-  layout->addWidget(evidence);
-  layout->addStretch(1);
+  // The evidence scrolls when the window is short (a 1366 x 768 screen); the controls above do not.
+  auto* scroll = new QScrollArea(this);
+  scroll->setObjectName("EvidenceScroll");
+  scroll->setWidget(evidence);
+  scroll->setWidgetResizable(true);
+  scroll->setFrameShape(QFrame::NoFrame);
+  scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  layout->addWidget(scroll, 1);
   SetRunning(false);
   use_->setEnabled(false);
 }
