@@ -13,7 +13,6 @@
 #include <QProgressBar>
 #include <QPushButton>
 #include <QScrollArea>
-#include <QScrollBar>
 #include <QScreen>
 #include <QSettings>
 #include <QShortcut>
@@ -698,12 +697,6 @@ QWidget* MainWindow::Scrollable(QWidget* content) {
   area->setWidget(content);
   area->setWidgetResizable(true);
   area->setFrameShape(QFrame::NoFrame);
-  // Scrolls vertically only: the panel keeps the width its fields need.
-  area->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
-  // Measured once the panel is polished (its size hint before that ignores the style).
-  QTimer::singleShot(0, area, [area, content] {
-    area->setMinimumWidth(content->sizeHint().width() + area->verticalScrollBar()->sizeHint().width());
-  });
   return area;
 }
 

@@ -33,6 +33,17 @@ using scanreg::test::WaitForJob;
 using scanreg::ui::JobRunner;
 using scanreg::ui::MainWindow;
 
+// A tiny simulated project (2 stations of 200 x 50) written into dir/p.
+scanreg::Expected<scanreg::io::Project> WriteTinyProject(const QTemporaryDir& dir) {
+  scanreg::SimulatedProjectOptions sim;
+  sim.stations = 2;
+  sim.scanner.cols = 200;
+  sim.scanner.rows = 50;
+  scanreg::NullProgress progress;
+  return scanreg::pipeline::WriteSimulatedProject(sim, dir.filePath("p").toStdString(), progress,
+                                                  scanreg::CancelToken());
+}
+
 class MainWindowTest : public QObject {
   Q_OBJECT
 
@@ -83,13 +94,7 @@ class MainWindowTest : public QObject {
   // dialog shows them and stores an edit in the project (undoable).
   void RegistrationUsesAndEditsTheProjectsSavedSettings() {
     QTemporaryDir dir;
-    scanreg::SimulatedProjectOptions sim;
-    sim.stations = 2;
-    sim.scanner.cols = 200;
-    sim.scanner.rows = 50;
-    scanreg::NullProgress progress;
-    auto project = scanreg::pipeline::WriteSimulatedProject(sim, dir.filePath("p").toStdString(), progress,
-                                                            scanreg::CancelToken());
+    auto project = WriteTinyProject(dir);
     QVERIFY(project.ok());
     scanreg::pipeline::RegisterOptions saved;
     saved.from_current_poses = true;
@@ -178,13 +183,7 @@ class MainWindowTest : public QObject {
 
   void SaveRefusesALockedOrChangedProjectAndOffersReload() {
     QTemporaryDir dir;
-    scanreg::SimulatedProjectOptions options;
-    options.stations = 2;
-    options.scanner.cols = 200;
-    options.scanner.rows = 50;
-    scanreg::NullProgress progress;
-    const auto simulated = scanreg::pipeline::WriteSimulatedProject(options, dir.filePath("p").toStdString(), progress,
-                                                                    scanreg::CancelToken());
+    const auto simulated = WriteTinyProject(dir);
     QVERIFY(simulated.ok());
     const QString path = QString::fromStdString(simulated->file.string());
     MainWindow window;
