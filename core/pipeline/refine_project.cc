@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "core/common/log.h"
-#include "core/pipeline/fine_align.h"
+#include "core/pipeline/refine_pair.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
 #include "core/pipeline/scale_defaults.h"
@@ -18,16 +18,14 @@
 namespace scanreg::pipeline {
 namespace {
 
-double Since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+std::string Format(const char* fmt, double a, double b) {
+  char buf[400];
+  std::snprintf(buf, sizeof buf, fmt, a, b);
+  return buf;
 }
 
-// The fine step's scale follows the overlap distance: poses are already close.
-RegisterOptions ScaledOptions(RegisterOptions o) {
-  const double d = o.overlap_distance_m;
-  o.dense_icp.voxel_m = std::min(o.dense_icp.voxel_m, 0.5 * d);
-  o.dense_icp.max_correspondence_schedule_m = {d, 0.5 * d, 0.25 * d};
-  return o;
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // Fraction of the child's samples (at most 2,000, evenly) with a parent sample within d.
@@ -38,89 +36,6 @@ double Overlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& chi
   int near = 0;
   for (const Eigen::Vector3d& p : pts) near += parent.Nearest(parent_from_child * p, d) >= 0;
   return double(near) / double(pts.size());
-}
-
-std::string Format(const char* fmt, double a, double b) {
-  char buf[400];
-  std::snprintf(buf, sizeof buf, fmt, a, b);
-  return buf;
-}
-
-// Refines one pair from the current poses and classifies it from the shared evidence.
-// evidence_m: the distance of the overlap and RMS evidence (the data's overlap distance; the
-// refinement's reach, options.overlap_distance_m, may be larger).
-io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& initial,
-                          const RegisterOptions& options, double evidence_m, const CancelToken& cancel) {
-  const auto t0 = std::chrono::steady_clock::now();
-  io::LinkRecord link;
-  link.parent = parent.scan->name;
-  link.child = child.scan->name;
-  link.method = std::string("none+") + FineMethodName(options.fine);
-  link.parent_from_child = initial;
-  // EM from far (the reach several times the evidence distance) stalls on a wrong pose where
-  // dense ICP does not (the bunny from 5 deg / 5 mm: one loop 2 deg open): dense ICP first, then
-  // the EM from there within 4 evidence distances.
-  Eigen::Isometry3d start = initial;
-  RegisterOptions fine_options = options;
-  if (options.fine != FineMethod::kDense && options.overlap_distance_m > 4 * evidence_m) {
-    RegisterOptions icp = options;
-    icp.fine = FineMethod::kDense;
-    if (Expected<FineResult> pre = AlignFine(parent, child, initial, icp, cancel); pre && pre->iterations > 0) {
-      start = pre->parent_from_child;
-      fine_options.overlap_distance_m = 4 * evidence_m;
-    }
-  }
-  Expected<FineResult> fine = AlignFine(parent, child, start, fine_options, cancel);
-  if (!fine) {
-    link.status = io::LinkStatus::kFailed;
-    link.reason = fine.error().message;
-  } else {
-    link.parent_from_child = fine->parent_from_child;
-    link.iterations = fine->iterations;
-    // The start poses are meant to be close: a refinement that walks far away has diverged (measured
-    // on the bunny: EM on a 38 % overlap pair 135 deg apart ended 45 deg off).
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& p : child.samples) centre += p;
-    centre /= std::max<double>(1.0, child.samples.size());
-    const double moved = (link.parent_from_child * centre - initial * centre).norm();
-    const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, evidence_m);
-    link.overlap = e.overlap;
-    link.rms_m = e.rms_m;
-    link.conflict = e.conflict;
-    link.moving = e.moving;
-    const LinkThresholds& t = options.thresholds;
-    std::string reason;
-    link.status = io::LinkStatus::kOk;
-    if (fine->iterations == 0) {  // not one step: the pose is the start pose, with no evidence of ours
-      link.status = io::LinkStatus::kFailed;
-      link.reason = Format(
-          "the fine step could not start: too few correspondences within the overlap distance %.1f mm at "
-          "samples of %.1f mm; they may be too large for this scan's size (set the range noise and the overlap "
-          "distance for this data)",
-          1e3 * options.overlap_distance_m, 1e3 * options.dense_icp.voxel_m);
-    } else if (moved > 2 * options.overlap_distance_m) {
-      link.status = io::LinkStatus::kFailed;
-      link.reason = Format(
-          "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
-          "distance %.1f mm): diverged; correct the start pose or raise the overlap distance",
-          1e3 * moved, 1e3 * options.overlap_distance_m);
-    } else if (!(reason = SurfaceFailure(t, link)).empty()) {
-      link.status = io::LinkStatus::kFailed;
-      link.reason = reason;
-    } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
-      link.status = io::LinkStatus::kWeak;
-      link.reason = reason;
-    } else if (!fine->converged) {
-      link.status = io::LinkStatus::kWeak;
-      link.reason = "the fine step stopped at its iteration cap before converging";
-    }
-  }
-  if (cancel.IsCancelled()) {
-    link.status = io::LinkStatus::kFailed;
-    link.reason = "cancelled";
-  }
-  link.seconds = Since(t0);
-  return link;
 }
 
 }  // namespace
@@ -153,7 +68,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
                   resolved->overlap_distance_m);
     LogInfo(buf);
   }
-  const RegisterOptions options = ScaledOptions(*resolved);
+  const RegisterOptions options = ScaledToReach(*resolved);
   const auto t_start = std::chrono::steady_clock::now();
   ProjectRegistration result;
 

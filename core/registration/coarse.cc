@@ -48,32 +48,6 @@ bool Distinct(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const Coar
          RotationAngle(a.linear().transpose() * b.linear()) > o.ambiguity_angle_rad;
 }
 
-// Heading about z and translation minimising the squared distances (levelled frames): the yaw
-// from the centred horizontal coordinates, the translation from the centroids.
-std::optional<Eigen::Isometry3d> FitHeading(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
-                                            const std::vector<double>& weights = {}) {
-  const std::size_t n = src.size();
-  if (n < 2) return std::nullopt;
-  const auto w = [&](std::size_t i) { return weights.empty() ? 1.0 : weights[i]; };
-  Eigen::Vector3d cs = Eigen::Vector3d::Zero(), cd = Eigen::Vector3d::Zero();
-  double wsum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) cs += w(i) * src[i], cd += w(i) * dst[i], wsum += w(i);
-  if (!(wsum > 0.0)) return std::nullopt;
-  cs /= wsum;
-  cd /= wsum;
-  double sin_sum = 0.0, cos_sum = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2d a = (src[i] - cs).head<2>(), b = (dst[i] - cd).head<2>();
-    cos_sum += w(i) * a.dot(b);
-    sin_sum += w(i) * (a.x() * b.y() - a.y() * b.x());
-  }
-  if (std::hypot(sin_sum, cos_sum) < 1e-12) return std::nullopt;  // horizontally coincident
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::AngleAxisd(std::atan2(sin_sum, cos_sum), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  out.translation() = cd - out.linear() * cs;
-  return out;
-}
-
 int SampleSize(const CoarseOptions& o) {
   if (o.method == CoarseMethod::kEpnp) return o.sample_size_epnp;
   return o.levelled ? 2 : 3;

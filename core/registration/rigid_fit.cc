@@ -69,4 +69,28 @@ Expected<Eigen::Isometry3d> FitRigid(const std::vector<Eigen::Vector3d>& source,
   return out;
 }
 
+std::optional<Eigen::Isometry3d> FitHeading(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+                                            const std::vector<double>& weights) {
+  const std::size_t n = src.size();
+  if (n < 2) return std::nullopt;
+  const auto w = [&](std::size_t i) { return weights.empty() ? 1.0 : weights[i]; };
+  Eigen::Vector3d cs = Eigen::Vector3d::Zero(), cd = Eigen::Vector3d::Zero();
+  double wsum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) cs += w(i) * src[i], cd += w(i) * dst[i], wsum += w(i);
+  if (!(wsum > 0.0)) return std::nullopt;
+  cs /= wsum;
+  cd /= wsum;
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = (src[i] - cs).head<2>(), b = (dst[i] - cd).head<2>();
+    cos_sum += w(i) * a.dot(b);
+    sin_sum += w(i) * (a.x() * b.y() - a.y() * b.x());
+  }
+  if (std::hypot(sin_sum, cos_sum) < 1e-12) return std::nullopt;  // horizontally coincident
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(std::atan2(sin_sum, cos_sum), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = cd - out.linear() * cs;
+  return out;
+}
+
 }  // namespace scanreg

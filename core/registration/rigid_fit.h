@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <optional>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -17,5 +18,12 @@ namespace scanreg {
 Expected<Eigen::Isometry3d> FitRigid(const std::vector<Eigen::Vector3d>& source,
                                      const std::vector<Eigen::Vector3d>& target,
                                      const std::vector<double>& weights = {});
+
+// Levelled frames (z up in both): the heading about z and the translation minimising the same sum,
+// from 2 or more pairs (the yaw from the centred horizontal coordinates, the translation from the
+// centroids). None with fewer than 2 pairs or horizontally coincident points.
+std::optional<Eigen::Isometry3d> FitHeading(const std::vector<Eigen::Vector3d>& source,
+                                            const std::vector<Eigen::Vector3d>& target,
+                                            const std::vector<double>& weights = {});
 
 }  // namespace scanreg
