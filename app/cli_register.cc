@@ -206,6 +206,8 @@ int RunRegister(const std::vector<std::string>& argv) {
         "       keep the imported poses (from --poses or the scan files' headers) fixed "
         "and place the other scans relative to them"},
        {"refine-imported", false, false, "       re-estimate imported poses (the default)"},
+       {"only-unregistered", false, false,
+        "       place only the scans that are not registered; every registered scan keeps its pose and link"},
        {"json", false, false, "       print the result as JSON"}},
       &code);
   if (!args) return code;
@@ -239,6 +241,14 @@ int RunRegister(const std::vector<std::string>& argv) {
     }
   }
   if (auto root = args->Get("root")) options->root = *root;
+  if (args->Has("only-unregistered")) {
+    for (const io::ProjectScan& s : project->scans)
+      if (!s.registered) options->only_scans.push_back(s.name);
+    if (options->only_scans.empty()) {
+      std::printf("every scan is registered; nothing to do (--only-unregistered)\n");
+      return 0;
+    }
+  }
   for (const std::string& p : args->GetAll("parent")) {
     const auto eq = p.find('=');
     const int child = eq == std::string::npos ? -1 : project->FindScan(p.substr(0, eq));

@@ -27,7 +27,9 @@
 #include "core/io/scan_file.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_edits.h"
+#include "core/pipeline/manual_alignment.h"
 #include "core/pipeline/project_scans.h"
+#include "core/pipeline/refine_pair.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
 #include "core/report/report.h"
@@ -36,6 +38,7 @@
 #include "ui/merge_panel.h"
 #include "ui/network_panel.h"
 #include "ui/pair_inspector.h"
+#include "ui/pick_points_dialog.h"
 #include "ui/pose_dialog.h"
 #include "ui/project_document.h"
 #include "ui/project_panels.h"
@@ -263,17 +266,31 @@ void MainWindow::CreateMenus() {
   QMenu* reg = menuBar()->addMenu(tr("&Registration"));
   QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
   run->setShortcut(Qt::CTRL | Qt::Key_R);
+  QAction* only_new = reg->addAction(tr("Register &unregistered scans"), this, [this] { RegisterUnregistered(); });
+  QAction* refine_all =
+      reg->addAction(tr("Refine all from &current poses"), this, [this] { RefineFromCurrentPoses(); });
+  reg->addSeparator();
+  // The selected scan (scan list).
+  auto with_scan = [this](const QString& what, std::function<void(const QString&)> act) {
+    return [this, what, act] {
+      if (SelectedScan().isEmpty()) {
+        ShowError(what, tr("Select a scan in the scan list first."));
+        return;
+      }
+      act(SelectedScan());
+    };
+  };
+  QAction* pick = reg->addAction(tr("Align scan by &picked points…"), this,
+                                 with_scan(tr("Align by picked points"), [this](const QString& s) { PickPoints(s); }));
+  QAction* refine = reg->addAction(tr("Re&fine scan from its pose"), this,
+                                   with_scan(tr("Refine scan"), [this](const QString& s) { RefineScan(s); }));
   QAction* edit_pose = reg->addAction(tr("Edit scan &pose…"), this, [this] { EditSelectedScanPose(); });
-  QAction* release = reg->addAction(tr("Re&lease hand placement"), this, [this] {
-    const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
-    if (!item) {
-      ShowError(tr("Release hand placement"), tr("Select a scan placed by hand in the scan list first."));
-      return;
-    }
-    ReleaseHandPlacement(item->text());
-  });
+  QAction* release = reg->addAction(tr("Re&lease hand placement"), this,
+                                    with_scan(tr("Release hand placement"),
+                                              [this](const QString& s) { ReleaseHandPlacement(s); }));
+  reg->addSeparator();
   QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
-  project_actions_ = {save, save_as, run, add, report, edit_pose, release, settings};
+  project_actions_ = {save, save_as, run, add, report, only_new, refine_all, pick, refine, edit_pose, release, settings};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
@@ -339,23 +356,136 @@ bool MainWindow::OpenDemoProject(const QString& dir) {
       [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans)); });
 }
 
-bool MainWindow::RegisterProject() {
+bool MainWindow::RegisterProject() { return StartRegistration(tr("register the scans"), RegistrationOptions(), true); }
+
+bool MainWindow::StartRegistration(const QString& text, pipeline::RegisterOptions options, bool store_settings) {
   if (project().scans.empty()) return false;
-  const pipeline::RegisterOptions options = RegistrationOptions();
   return jobs_->Start<Registered>(
       tr("Registering"),
-      [project = project(), scans = scans(), options](ProgressSink& progress,
-                                                       const CancelToken& cancel) mutable -> Expected<Registered> {
-    pipeline::StoreRegisterSettings(options, &project.settings);  // what this run used, as the CLI saves it
+      [project = project(), scans = scans(), options, store_settings](
+          ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Registered> {
+    if (store_settings) pipeline::StoreRegisterSettings(options, &project.settings);  // as the CLI saves them
     Expected<pipeline::ProjectRegistration> r =
         pipeline::RegisterProjectScans(project, scans, options, progress, cancel);
     if (!r) return r.error();
     return Registered{std::move(project), r->confusion};
       },
-      [this](Registered& r) {
-        doc_->ApplyRegistration(tr("register the scans"), std::move(r.project), r.confusion);
+      [this, text](Registered& r) {
+        doc_->ApplyRegistration(text, std::move(r.project), r.confusion);
         ReportRegistration();
       });
+}
+
+bool MainWindow::RegisterUnregistered() {
+  pipeline::RegisterOptions options = RegistrationOptions();
+  for (const io::ProjectScan& s : project().scans)
+    if (!s.registered) options.only_scans.push_back(s.name);
+  if (options.only_scans.empty()) {
+    statusBar()->showMessage(tr("Every scan is registered: nothing to add"), 8000);
+    return false;
+  }
+  return StartRegistration(tr("register the unregistered scans"), options, false);
+}
+
+bool MainWindow::RefineFromCurrentPoses() {
+  pipeline::RegisterOptions options = RegistrationOptions();
+  options.from_current_poses = true;
+  return StartRegistration(tr("refine every scan from its current pose"), options, false);
+}
+
+QString MainWindow::SelectedScan() const {
+  const QTableWidgetItem* item = scan_list_->item(scan_list_->currentRow(), 0);
+  return item ? item->text() : QString();
+}
+
+namespace {
+
+// The registered scan a scan is refined or aligned to: its tree parent, else the registered scans
+// nearest to where it stands first.
+QStringList ParentCandidates(const io::Project& project, const std::string& child) {
+  const int c = project.FindScan(child);
+  std::vector<std::pair<double, std::string>> near;
+  std::string tree_parent;
+  for (const io::LinkRecord& l : project.links)
+    if (io::IsTreeLink(l) && l.child == child) tree_parent = l.parent;
+  for (const io::ProjectScan& s : project.scans) {
+    if (!s.registered || s.name == child) continue;
+    const double d = s.name == tree_parent ? -1.0
+                                           : (s.world_from_scan.translation() -
+                                              project.scans[c].world_from_scan.translation()).norm();
+    near.emplace_back(d, s.name);
+  }
+  std::sort(near.begin(), near.end());
+  QStringList out;
+  for (const auto& [d, name] : near) out << QString::fromStdString(name);
+  return out;
+}
+
+}  // namespace
+
+bool MainWindow::StartPairJob(const QString& title,
+                              std::function<Expected<io::LinkRecord>(ProgressSink&, const CancelToken&)> job) {
+  return jobs_->Start<io::LinkRecord>(title, std::move(job), [this, title](io::LinkRecord& link) {
+    const QString pair = QString::fromStdString(link.child + " → " + link.parent);
+    if (link.status == io::LinkStatus::kFailed) {
+      ShowError(title, tr("%1 failed: %2\n\nThe project is unchanged.").arg(pair, QString::fromStdString(link.reason)));
+      return;
+    }
+    if (UsePairResult(link)) {
+      last_summary_ = tr("%1: %2, RMS %3 mm, overlap %4 %")
+                          .arg(pair, io::LinkStatusName(link.status))
+                          .arg(1e3 * link.rms_m, 0, 'f', 1)
+                          .arg(100 * link.overlap, 0, 'f', 0);
+      LogInfo(last_summary_.toStdString());
+    }
+  });
+}
+
+bool MainWindow::RefineScan(const QString& scan) {
+  const QStringList parents = ParentCandidates(project(), scan.toStdString());
+  const int c = project().FindScan(scan.toStdString());
+  if (c < 0 || parents.isEmpty() || project().root == scan.toStdString()) {
+    ShowError(tr("Refine scan"), c < 0 ? tr("Select a scan in the scan list first.")
+                                 : project().root == scan.toStdString()
+                                     ? tr("%1 is the root: the other scans are refined to it.").arg(scan)
+                                     : tr("No registered scan to refine %1 against: register or place one first.").arg(scan));
+    return false;
+  }
+  const int p = project().FindScan(parents.first().toStdString());
+  return StartPairJob(tr("Refining %1 to %2").arg(scan, parents.first()),
+                      [parent = scans()[p], child = scans()[c], options = RegistrationOptions()](
+                          ProgressSink&, const CancelToken& cancel) {
+                        const Eigen::Isometry3d start = parent.world_from_scan.inverse() * child.world_from_scan;
+                        return pipeline::RefinePairFromPose(parent, child, start, options, 0.0, cancel);
+                      });
+}
+
+PickPointsDialog* MainWindow::PickPoints(const QString& child) {
+  const QStringList parents = ParentCandidates(project(), child.toStdString());
+  if (project().FindScan(child.toStdString()) < 0 || parents.isEmpty()) {
+    ShowError(tr("Align by picked points"), parents.isEmpty() && !child.isEmpty()
+                                                ? tr("No registered scan to align %1 to: register or place one first.").arg(child)
+                                                : tr("Select the scan to align in the scan list first."));
+    return nullptr;
+  }
+  auto* dialog = new PickPointsDialog(scans(), child, parents, this);
+  dialog->setAttribute(Qt::WA_DeleteOnClose);
+  connect(dialog, &QDialog::accepted, this, [this, dialog] {
+    AlignFromPickedPoints(dialog->ParentScan(), dialog->ChildScan(), dialog->Pairs(), dialog->Levelled());
+  });
+  dialog->open();
+  return dialog;
+}
+
+bool MainWindow::AlignFromPickedPoints(const QString& parent, const QString& child,
+                                       std::vector<io::PickedPoint> pairs, bool levelled) {
+  const int p = project().FindScan(parent.toStdString()), c = project().FindScan(child.toStdString());
+  if (p < 0 || c < 0) return false;
+  return StartPairJob(tr("Aligning %1 to %2 by picked points").arg(child, parent),
+                      [parent = scans()[p], child = scans()[c], pairs = std::move(pairs), levelled,
+                       options = RegistrationOptions()](ProgressSink&, const CancelToken& cancel) {
+                        return pipeline::AlignFromPickedPoints(parent, child, pairs, levelled, options, cancel);
+                      });
 }
 
 void MainWindow::SaveProjectAs() {
@@ -389,18 +519,36 @@ bool MainWindow::SaveProject(const QString& path) {
   return true;
 }
 
-void MainWindow::SetParentOverride(const QString& child, const QString& parent) {
+bool MainWindow::SetParentOverride(const QString& child, const QString& parent) {
   const int c = project().FindScan(child.toStdString());
-  if (c < 0 || child == parent || (!parent.isEmpty() && project().FindScan(parent.toStdString()) < 0)) return;
-  io::Project after = project();
-  if (parent.isEmpty()) {
-    after.scans[c].parent_override.reset();
-  } else {
-    after.scans[c].parent_override = parent.toStdString();
-  }
+  if (c < 0 || child == parent || (!parent.isEmpty() && project().FindScan(parent.toStdString()) < 0)) return false;
   const QString text =
       parent.isEmpty() ? tr("clear the parent of %1").arg(child) : tr("register %1 to %2").arg(child, parent);
-  doc_->Edit(text, std::move(after), true);
+  std::optional<std::string> chosen;
+  if (!parent.isEmpty()) chosen = parent.toStdString();
+  struct Overridden {
+    io::Project project;
+    pipeline::OverrideOutcome outcome;
+  };
+  return jobs_->Start<Overridden>(
+      tr("Registering %1").arg(child),
+      [project = project(), scans = scans(), options = RegistrationOptions(), name = child.toStdString(), chosen](
+          ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Overridden> {
+        Expected<pipeline::OverrideOutcome> out =
+            pipeline::OverrideParent(project, scans, name, chosen, options, progress, cancel);
+        if (!out) return out.error();
+        return Overridden{std::move(project), std::move(*out)};
+      },
+      [this, text](Overridden& r) {
+        const QString message = QString::fromStdString(r.outcome.message);
+        if (!r.outcome.applied) {
+          ShowError(tr("The link you asked for failed"), message);
+          return;
+        }
+        doc_->ApplyRegistration(text, std::move(r.project), r.outcome.confusion);
+        ReportRegistration();
+        last_summary_ = message + "; " + last_summary_;
+      });
 }
 
 void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject) {

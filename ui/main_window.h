@@ -7,8 +7,10 @@
 #include <Eigen/Core>
 #include <QImage>
 #include <QMainWindow>
+#include <functional>
 #include <vector>
 
+#include "core/common/progress.h"
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
@@ -25,6 +27,7 @@ class ConfusionPanel;
 class JobRunner;
 class LogPanel;
 class MergePanel;
+class PickPointsDialog;
 class PoseDialog;
 class ProjectDocument;
 class RegisterSettingsDialog;
@@ -73,14 +76,36 @@ class MainWindow : public QMainWindow {
   void ShowError(const QString& title, const QString& message);
   void OfferReload(const QString& path, const QString& message);
 
-  // The user's edits, undoable. A parent override re-runs the registration when no job runs.
-  void SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
+  // The user's edits, undoable. A parent override registers the child to that parent on the
+  // worker (pipeline::OverrideParent: only it and the scans under it); when that link fails the old
+  // one stays and a dialog says why. False when a job runs or the names are wrong.
+  bool SetParentOverride(const QString& child, const QString& parent);  // parent empty: clear
   void SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject);
   // Places a scan by hand (pipeline::SetScanPose); false, with a dialog, when refused.
   bool SetScanPose(const QString& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents);
   // Lets the registration place a scan placed by hand (Register all keeps hand placements); false,
   // with a dialog, when the scan was not placed by hand.
   bool ReleaseHandPlacement(const QString& scan);
+  // The scan selected in the scan list (empty when none).
+  QString SelectedScan() const;
+  // Registration → Register unregistered scans: only the scans that are not registered are placed;
+  // the others keep their poses and links. False when every scan is registered or a job runs.
+  bool RegisterUnregistered();
+  // Registration → Refine all from current poses: one run of --coarse none (the saved settings are
+  // not changed).
+  bool RefineFromCurrentPoses();
+  // Registration → Refine scan from its pose: the scan refined against its tree parent (or the
+  // nearest registered scan) from where it stands; the result becomes its link (undoable), or a
+  // dialog says why it failed.
+  bool RefineScan(const QString& scan);
+  // Registration → Align by picked points…: the dialog for `child` (window-modal, does not block;
+  // null with a dialog when no registered scan can be its parent). Accepting it starts
+  // AlignFromPickedPoints.
+  PickPointsDialog* PickPoints(const QString& child);
+  // Fit and refine on the worker (pipeline::AlignFromPickedPoints); the result becomes the child's
+  // link, marked "picked", or a dialog says why not.
+  bool AlignFromPickedPoints(const QString& parent, const QString& child, std::vector<io::PickedPoint> pairs,
+                             bool levelled);
   // Registration → Edit scan pose…: opens the pose dialog for the scan selected in the scan list
   // (window-modal, does not block); returns it (null when no scan is selected), for tests.
   PoseDialog* EditSelectedScanPose();
@@ -117,6 +142,9 @@ class MainWindow : public QMainWindow {
   void OnProjectLoaded(io::Project project, std::vector<Scan> scans);  // opened, created or simulated
   void UpdateTitle();
   void ReportRegistration();  // the run's summary: log, and the status bar until the next job
+  bool StartRegistration(const QString& text, pipeline::RegisterOptions options, bool store_settings);
+  // Runs a pair result job and makes its link the child's (Refine scan, picked points).
+  bool StartPairJob(const QString& title, std::function<Expected<io::LinkRecord>(ProgressSink&, const CancelToken&)> job);
   void OnJobFailed(const QString& title, const QString& message, bool cancelled);
   void SetBusy(bool busy);
   void ShowAbout();

@@ -9,45 +9,16 @@
 #include <QGraphicsView>
 #include <QHBoxLayout>
 #include <QLabel>
-#include <QMouseEvent>
 #include <QVBoxLayout>
-#include <QWheelEvent>
 #include <algorithm>
+
+#include "ui/zoom_view.h"
 
 namespace scanreg::ui {
 namespace {
 
 enum ItemKind { kKeypoint = 1, kInlier = 2, kOutlier = 3 };
 constexpr double kPairGap = 40.0;  // pixels between the two panoramas of a pair
-
-// Wheel zooms about the cursor, drag pans, double-click fits the scene.
-class ZoomView : public QGraphicsView {
- public:
-  explicit ZoomView(QWidget* parent) : QGraphicsView(parent) {
-    setDragMode(QGraphicsView::ScrollHandDrag);  // panning works with the scroll bars hidden
-    // Hidden scroll bars: fitting on resize cannot make them appear and disappear in a loop (the
-    // hang seen in the network panel).
-    setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
-    setVerticalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
-    setTransformationAnchor(QGraphicsView::AnchorUnderMouse);
-    setRenderHint(QPainter::Antialiasing);
-    setBackgroundBrush(QColor(28, 30, 34));
-  }
-  void Fit() {
-    if (scene() && !scene()->items().isEmpty()) fitInView(scene()->itemsBoundingRect(), Qt::KeepAspectRatio);
-  }
-
- protected:
-  void wheelEvent(QWheelEvent* event) override {
-    const double factor = event->angleDelta().y() > 0 ? 1.25 : 0.8;
-    scale(factor, factor);
-  }
-  void mouseDoubleClickEvent(QMouseEvent*) override { Fit(); }
-  void resizeEvent(QResizeEvent* event) override {
-    QGraphicsView::resizeEvent(event);
-    Fit();
-  }
-};
 
 QImage ToImage(const cv::Mat& gray) {
   if (gray.empty() || gray.type() != CV_8UC1) return {};

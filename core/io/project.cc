@@ -47,7 +47,7 @@ LinkStatus LinkStatusFromName(const std::string& s) {
 }
 
 json LinkToJson(const LinkRecord& l) {
-  return json{{"parent", l.parent},
+  json j{{"parent", l.parent},
               {"child", l.child},
               {"method", l.method},
               {"status", LinkStatusName(l.status)},
@@ -68,6 +68,13 @@ json LinkToJson(const LinkRecord& l) {
               {"loop_check", l.loop_check},
               {"user_accepted", l.user_accepted},
               {"user_rejected", l.user_rejected}};
+  if (!l.picked.empty()) {
+    json picked = json::array();
+    for (const PickedPoint& p : l.picked)
+      picked.push_back({p.parent.x(), p.parent.y(), p.parent.z(), p.child.x(), p.child.y(), p.child.z()});
+    j["picked"] = picked;
+  }
+  return j;
 }
 
 Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
@@ -100,6 +107,22 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
     auto t = PoseFromJson(j["parent_from_child"], where + " parent_from_child");
     if (!t) return t.error();
     l.parent_from_child = *t;
+  }
+  if (j.contains("picked")) {  // [[parent x y z, child x y z], ...] in metres, each scan's own frame
+    const json& picked = j["picked"];
+    const Error bad = MakeError(ErrorCode::kParseError, where + ": 'picked' must be a list of 6 finite numbers per "
+                                                                "picked point (parent x y z, child x y z)");
+    if (!picked.is_array()) return bad;
+    for (const json& row : picked) {
+      if (!row.is_array() || row.size() != 6) return bad;
+      double v[6];
+      for (int k = 0; k < 6; ++k) {
+        if (!row[k].is_number()) return bad;
+        v[k] = row[k].get<double>();
+        if (!std::isfinite(v[k])) return bad;
+      }
+      l.picked.push_back({Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5])});
+    }
   }
   return l;
 }

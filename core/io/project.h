@@ -20,6 +20,12 @@ const char* LinkStatusName(LinkStatus status);
 
 // The evidence of one pairwise registration (child registered to parent). Stored in the project
 // so that a report or the GUI can show it without re-running.
+// A point the user picked in both scans of a link (manual alignment), each in its scan's own frame.
+struct PickedPoint {
+  Eigen::Vector3d parent = Eigen::Vector3d::Zero();
+  Eigen::Vector3d child = Eigen::Vector3d::Zero();
+};
+
 struct LinkRecord {
   std::string parent;  // scan names
   std::string child;
@@ -42,6 +48,7 @@ struct LinkRecord {
   bool loop_check = false;     // a redundant link that verified a loop of the tree (not chained)
   bool user_accepted = false;  // the user accepted a weak link
   bool user_rejected = false;  // the user rejected the link
+  std::vector<PickedPoint> picked;  // the points the user picked (manual alignment); empty otherwise
 };
 
 struct ProjectScan {

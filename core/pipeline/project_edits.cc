@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/io/project_tree.h"
+#include "core/pipeline/register_project.h"
 
 namespace scanreg::pipeline {
 using io::IsTreeLink;
@@ -64,7 +65,7 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   io::LinkRecord added = link;
   added.loop_check = false;
   added.user_rejected = false;
-  added.user_accepted = link.status == io::LinkStatus::kWeak;
+  added.user_accepted = true;  // the user chose it: kept by later registrations
   links.push_back(added);
   return Status::Ok();
 }
@@ -110,6 +111,51 @@ Status ReleaseHandPlacement(const std::string& scan, io::Project& project) {
   ps.registered = false;
   ps.unregistered_reason = "released from its hand placement; register to place it";
   return Status::Ok();
+}
+
+Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector<Scan>& scans,
+                                         const std::string& child, const std::optional<std::string>& parent,
+                                         RegisterOptions options, ProgressSink& progress, const CancelToken& cancel) {
+  const int c = project.FindScan(child);
+  if (c < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + child + "' is not a scan of the project");
+  if (parent && (project.FindScan(*parent) < 0 || *parent == child)) {
+    return MakeError(ErrorCode::kInvalidArgument, "'" + *parent + "' cannot be the parent of '" + child +
+                                                      "'; choose another scan of the project");
+  }
+  if (parent && project.root == child) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "'" + child + "' is the root of the scan order and has no parent; set another root first");
+  }
+  io::Project after = project;
+  after.scans[c].parent_override = parent;
+  options.only_scans = {child};
+  if (project.scans[c].registered)
+    for (int i : io::ScansRegisteredThrough(project, c))
+      if (i != c) options.only_scans.push_back(project.scans[i].name);
+  Expected<ProjectRegistration> r = RegisterProjectScans(after, scans, options, progress, cancel);
+  if (!r) return r.error();
+  OverrideOutcome out;
+  out.confusion = r->confusion;
+  const io::ProjectScan& now = after.scans[c];
+  std::string old_parent;
+  for (const io::LinkRecord& l : project.links)
+    if (IsTreeLink(l) && l.child == child) old_parent = l.parent;
+  if (!now.registered && project.scans[c].registered) {
+    out.message = "the link of " + child + " to " + parent.value_or("another scan") + " failed (" +
+                  now.unregistered_reason + "); " + child + " keeps its " +
+                  (old_parent.empty() ? std::string("pose") : "link to " + old_parent) +
+                  " and the override was not kept";
+    return out;
+  }
+  std::string new_parent;
+  for (const io::LinkRecord& l : after.links)
+    if (IsTreeLink(l) && l.child == child) new_parent = l.parent;
+  out.applied = true;
+  out.message = now.registered ? child + " registered to " + new_parent + " (" + std::to_string(options.only_scans.size()) +
+                                     " scan(s) re-registered)"
+                               : child + " stays unregistered: " + now.unregistered_reason;
+  project = std::move(after);
+  return out;
 }
 
 }  // namespace scanreg::pipeline

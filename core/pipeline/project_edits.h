@@ -3,10 +3,16 @@
 // scans registered through the edited scan with it, so that their relative poses are kept.
 #pragma once
 
+#include <Eigen/Core>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "core/common/expected.h"
+#include "core/common/progress.h"
+#include "core/geometry/scan.h"
 #include "core/io/project.h"
+#include "core/pipeline/register_options.h"
 
 namespace scanreg::pipeline {
 
@@ -15,7 +21,8 @@ namespace scanreg::pipeline {
 // Errors (kInvalidArgument, naming the scans and what to do): unknown scan, a failed link, an
 // unregistered parent, a parent registered through the child (the tree would have a cycle).
 // When the child's tree parent changes, the parent becomes its parent override, so that a later
-// re-registration keeps the user's choice. A weak link is marked accepted.
+// re-registration keeps the user's choice. The link is marked accepted: the user chose it, and a
+// later registration uses it as it is (UserChoices::kept).
 Status ApplyPairResult(const io::LinkRecord& link, io::Project& project);
 
 // Places `scan` at `world_from_scan` by hand: it becomes registered with a manual pose (no link
@@ -30,5 +37,20 @@ Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_
 // point but is no longer held (unregistered until the next registration). Error when it was not
 // placed by hand.
 Status ReleaseHandPlacement(const std::string& scan, io::Project& project);
+
+// Registers `child` to `parent` (a parent override; none: let the registration choose again),
+// re-registering only the child and the scans registered through it; every other scan keeps its
+// pose and link. When the forced link fails and the child had a link before, the project is left
+// as it was — the old link stays and the override is not kept — and the outcome says why.
+// `scans`: the project's scans (points), in project order. Errors: unknown scans, the root given a
+// parent, the registration's errors (cancel, invalid options).
+struct OverrideOutcome {
+  bool applied = false;  // false: the old link stays
+  std::string message;   // what happened, for the log and a dialog
+  Eigen::MatrixXi confusion;
+};
+Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector<Scan>& scans,
+                                         const std::string& child, const std::optional<std::string>& parent,
+                                         RegisterOptions options, ProgressSink& progress, const CancelToken& cancel);
 
 }  // namespace scanreg::pipeline

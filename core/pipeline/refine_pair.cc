@@ -115,12 +115,16 @@ Expected<io::LinkRecord> RefinePairFromPose(const Scan& parent, const Scan& chil
                      "refining from a pose has no feature matches for the fine method keypoints; use em, "
                      "projective-icp or dense");
   }
-  if (!(reach_m > 0) || !std::isfinite(reach_m)) {
-    return MakeError(ErrorCode::kInvalidArgument, "the refinement's reach must be a positive distance");
+  if (!(reach_m >= 0) || !std::isfinite(reach_m)) {
+    return MakeError(ErrorCode::kInvalidArgument, "the refinement's reach must be a distance of 0 or more");
   }
-  Expected<RegisterOptions> resolved = ResolveLengths(raw_options, {&parent, &child});
+  ProjectScale scale;
+  Expected<RegisterOptions> resolved = ResolveLengths(raw_options, {&parent, &child}, &scale);
   if (!resolved) return resolved.error();
   const double evidence_m = resolved->overlap_distance_m;
+  if (reach_m == 0) {  // as far as the two poses are apart (the scans' world_from_scan)
+    reach_m = StartDistance({&parent, &child}, evidence_m, scale.extent_m > 0 ? scale.extent_m : 100 * evidence_m);
+  }
   resolved->overlap_distance_m = std::max(reach_m, evidence_m);
   const RegisterOptions options = ScaledToReach(*resolved);
   PreparedScan prepared[2];

@@ -27,7 +27,8 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
                           const RegisterOptions& options, double evidence_m, const CancelToken& cancel);
 
 // One pair on its own: lengths resolved from both scans (scale_defaults.h), samples prepared, and
-// RefinePair with a reach of reach_m (at least the data's overlap distance). Errors: invalid
+// RefinePair with a reach of reach_m (at least the data's overlap distance; 0: how far apart the
+// scans' world_from_scan put them, StartDistance in scale_defaults.h). Errors: invalid
 // options, the keypoints fine method, a scan without valid points, cancel.
 Expected<io::LinkRecord> RefinePairFromPose(const Scan& parent, const Scan& child, const Eigen::Isometry3d& initial,
                                             const RegisterOptions& options, double reach_m,

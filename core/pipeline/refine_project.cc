@@ -40,9 +40,7 @@ double Overlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& chi
 
 }  // namespace
 
-Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans,
-                                                       const std::vector<std::optional<std::string>>& parent_override,
-                                                       const std::vector<std::pair<std::string, std::string>>& rejected,
+Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans, const UserChoices& user,
                                                        const RegisterOptions& raw_options, ProgressSink& progress,
                                                        const CancelToken& cancel) {
   if (Status s = raw_options.Validate(); !s) return s.error();
@@ -62,7 +60,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
   if (raw_options.overlap_distance_m == 0) {
     // The fine step starts from the current poses: its reach, and the overlap that links scans,
     // follow how far apart they are (the RMS thresholds stay at the data's scale).
-    resolved->overlap_distance_m = StartDistance(scans, resolved->overlap_distance_m, scale.extent_m);
+    resolved->overlap_distance_m = StartDistance(all, resolved->overlap_distance_m, scale.extent_m);
     char buf[160];
     std::snprintf(buf, sizeof buf, "refining from the current poses: overlap distance %.3g m (how far apart they are)",
                   resolved->overlap_distance_m);
@@ -99,7 +97,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     }
   result.seconds_matching = Since(t_overlap);
 
-  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, user, options.root);
   if (!choices) return choices.error();
   LinkSource source;
   source.weights = result.confusion;

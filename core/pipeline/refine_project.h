@@ -24,9 +24,7 @@ namespace scanreg::pipeline {
 // poses; pairs below thresholds.min_overlap are not linked. options.overlap_distance_m also sets
 // the scale of the fine step (dense ICP voxel and distance schedule, EM correspondence limit), so
 // it should be a few times the current pose error.
-Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans,
-                                                       const std::vector<std::optional<std::string>>& parent_override,
-                                                       const std::vector<std::pair<std::string, std::string>>& rejected,
+Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans, const UserChoices& user,
                                                        const RegisterOptions& options, ProgressSink& progress,
                                                        const CancelToken& cancel);
 

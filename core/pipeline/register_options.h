@@ -95,6 +95,10 @@ struct RegisterOptions {
   // registration and the other scans are placed relative to them. Otherwise imported poses are
   // re-estimated (with from_current_poses, refined from where they are).
   bool keep_imported = false;
+  // A run's scope, not a setting (`register --only-unregistered`, the GUI's Register unregistered
+  // scans and parent overrides): only these scans are placed; every other registered scan keeps its
+  // pose and its links and anchors the run. Empty: every scan.
+  std::vector<std::string> only_scans;
   std::optional<std::string> root;          // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
   Status Validate() const;

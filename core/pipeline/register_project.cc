@@ -66,10 +66,9 @@ std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int chil
   return out;
 }
 
-Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans,
-                                                   const std::vector<std::optional<std::string>>& parent_override,
-                                                   const std::vector<std::pair<std::string, std::string>>& rejected,
+Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans, const UserChoices& user,
                                                    const std::optional<std::string>& root) {
+  const std::vector<std::optional<std::string>>& parent_override = user.parent_override;
   const int n = static_cast<int>(scans.size());
   ScanOrderChoices out;
   if (root) {
@@ -101,16 +100,28 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
       seen[cur] = 1;
     }
   }
-  for (const auto& [p, c] : rejected) {
+  for (const auto& [p, c] : user.rejected) {
     const int pi = IndexOf(scans, p), ci = IndexOf(scans, c);
     if (pi >= 0 && ci >= 0) out.excluded.emplace_back(pi, ci);
+  }
+  for (const io::LinkRecord& l : user.kept) {
+    const int pi = IndexOf(scans, l.parent), ci = IndexOf(scans, l.child);
+    if (pi < 0 || ci < 0 || pi == ci || (out.root && *out.root == ci)) continue;
+    if (out.overrides[ci] && *out.overrides[ci] != pi) continue;  // the override wins
+    // A kept link that would close a cycle of parents is not used (the registration decides).
+    bool cycle = false;
+    for (int cur = pi, steps = 0; out.overrides[cur] && steps <= n; ++steps) {
+      cur = *out.overrides[cur];
+      cycle |= cur == ci;
+    }
+    if (cycle) continue;
+    out.overrides[ci] = pi;
+    out.kept[{pi, ci}] = l;
   }
   return out;
 }
 
-Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
-                                            const std::vector<std::optional<std::string>>& parent_override,
-                                            const std::vector<std::pair<std::string, std::string>>& rejected,
+Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& raw_options, ProgressSink& progress,
                                             const CancelToken& cancel) {
   if (Status s = raw_options.Validate(); !s) return s.error();
@@ -122,7 +133,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
     }
   }
   if (raw_options.from_current_poses)
-    return RegisterFromCurrentPoses(scans, parent_override, rejected, raw_options, progress, cancel);
+    return RegisterFromCurrentPoses(scans, user, raw_options, progress, cancel);
   std::vector<const Scan*> all;
   for (const Scan& s : scans) all.push_back(&s);
   const Expected<RegisterOptions> resolved = ResolveLengths(raw_options, all);
@@ -132,7 +143,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
   ProjectRegistration result;
 
   // The user's choices are checked before the features are computed.
-  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, parent_override, rejected, options.root);
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, user, options.root);
   if (!choices) return choices.error();
 
   // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
@@ -234,37 +245,55 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
                                                    const CancelToken& cancel) {
-  std::vector<std::optional<std::string>> overrides;
-  for (const io::ProjectScan& s : project.scans) overrides.push_back(s.parent_override);
-  std::vector<std::pair<std::string, std::string>> rejected;
-  for (const io::LinkRecord& l : project.links)
-    if (l.user_rejected) rejected.emplace_back(l.parent, l.child);
+  const std::size_t n = project.scans.size();
+  // The scans this run may place (options.only_scans; default all); the others keep pose and links.
+  std::vector<bool> in_scope(n, options.only_scans.empty());
+  for (const std::string& name : options.only_scans) {
+    const int i = project.FindScan(name);
+    if (i < 0) return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "' is not in the project");
+    in_scope[i] = true;
+  }
+  UserChoices user;
+  for (const io::ProjectScan& s : project.scans) user.parent_override.push_back(s.parent_override);
+  for (const io::LinkRecord& l : project.links) {
+    if (l.user_rejected) user.rejected.emplace_back(l.parent, l.child);
+    const int c = project.FindScan(l.child);
+    if (c < 0 || l.status == io::LinkStatus::kFailed || l.user_rejected || l.loop_check) continue;
+    // The user's links (accepted, picked), and outside the scope every tree link, are used as they are.
+    if (l.user_accepted || (!in_scope[c] && project.scans[c].registered)) user.kept.push_back(l);
+  }
   if (!options.root && project.root) options.root = project.root;
-  std::vector<bool> anchor(project.scans.size(), false);
+  std::vector<bool> anchor(n, false);
   int anchors = 0;
-  for (std::size_t i = 0; i < project.scans.size(); ++i)
-    anchors += anchor[i] = options.keep_imported && project.scans[i].registered && project.scans[i].imported_pose;
-  if (anchors > 0) {  // the datum is an imported pose: the root must be one
+  for (std::size_t i = 0; i < n; ++i) {
+    const io::ProjectScan& s = project.scans[i];
+    anchors += anchor[i] = s.registered && ((options.keep_imported && s.imported_pose) || !in_scope[i]);
+  }
+  if (anchors > 0) {  // the datum is a pose that stays: the root must be one
     const int root = options.root ? project.FindScan(*options.root) : -1;
     if (root < 0 || !anchor[root]) {
       const int first = static_cast<int>(std::find(anchor.begin(), anchor.end(), true) - anchor.begin());
       options.root = project.scans[first].name;
     }
   }
-  Expected<ProjectRegistration> result = RegisterScans(scans, overrides, rejected, options, progress, cancel);
+  Expected<ProjectRegistration> result = RegisterScans(scans, user, options, progress, cancel);
   if (!result) return result.error();
   // The user's hand placements are decisions (issue 14): kept as placed, and the scans registered
   // through one are placed from it (they rest on it), like scans below an imported pose.
   std::vector<bool> locked = anchor;
   int hand_placed = 0;
-  for (std::size_t i = 0; i < project.scans.size(); ++i)
+  for (std::size_t i = 0; i < n; ++i)
     if (project.scans[i].registered && project.scans[i].manual_pose) locked[i] = true, ++hand_placed;
   if (anchors + hand_placed > 0) KeepImportedPoses(project, locked, &*result);
   const io::Project before = project;
   ApplyRegistration(*result, project);
-  for (std::size_t i = 0; i < project.scans.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     io::ProjectScan& ps = project.scans[i];
     const io::ProjectScan& old = before.scans[i];
+    if (!in_scope[i]) {  // outside the scope: as it was
+      ps = old;
+      continue;
+    }
     if (locked[i] && old.manual_pose) {
       ps.manual_pose = true;
       LogInfo("scan '" + ps.name + "' keeps its hand placement (Release hand placement lets the registration place it)");
@@ -276,6 +305,19 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
       ps.registered = ps.imported_pose = true;
       ps.world_from_scan = old.world_from_scan;
     }
+  }
+  if (!options.only_scans.empty()) {  // links: the old ones of the scans outside the scope, the new ones inside
+    std::vector<io::LinkRecord> links;
+    for (const io::LinkRecord& l : before.links) {
+      const int c = project.FindScan(l.child);
+      if (c >= 0 && !in_scope[c]) links.push_back(l);
+    }
+    for (const io::LinkRecord& l : project.links) {
+      const int c = project.FindScan(l.child);
+      if (c >= 0 && in_scope[c]) links.push_back(l);
+    }
+    project.links = std::move(links);
+    project.root = before.root ? before.root : project.root;
   }
   return result;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,23 +57,30 @@ Status PrepareScanFeatures(const Scan& scan, const RegisterOptions& options, Pre
 
 std::vector<FeatureMatch> BothWays(const MatchTable& table, int parent, int child);
 
-// The user's scan-order choices by scan index: root, parent overrides, rejected links (dropped
-// when they name a scan not in the list). Errors name an unknown root or parent override.
+// The user's decisions a registration keeps, by scan name.
+struct UserChoices {
+  std::vector<std::optional<std::string>> parent_override;    // one per scan (empty: none)
+  std::vector<std::pair<std::string, std::string>> rejected;  // (parent, child) links the user rejected
+  // Links the user made or accepted (picked points, a pair result used, a weak link accepted): used
+  // as they are, never re-registered or failed by a loop check; the link's parent becomes the
+  // child's parent unless the child has another parent override (then the override wins).
+  std::vector<io::LinkRecord> kept;
+};
+
+// The user's choices by scan index: root, parent overrides, rejected links and kept links (links
+// and kept links naming a scan not in the list are dropped; a kept link to the root is dropped:
+// the root keeps its pose). Errors name an unknown root or parent override, or a cycle.
 struct ScanOrderChoices {
   std::optional<int> root;
   std::vector<std::optional<int>> overrides;  // one per scan
   std::vector<std::pair<int, int>> excluded;  // (parent, child)
+  std::map<std::pair<int, int>, io::LinkRecord> kept;  // (parent, child)
 };
-Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans,
-                                                   const std::vector<std::optional<std::string>>& parent_override,
-                                                   const std::vector<std::pair<std::string, std::string>>& rejected,
+Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans, const UserChoices& user,
                                                    const std::optional<std::string>& root);
 
-// scans: with their current world_from_scan (the root keeps its own); parent_override by scan
-// name (empty optional = automatic); rejected: (parent, child) links the user rejected.
-Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans,
-                                            const std::vector<std::optional<std::string>>& parent_override,
-                                            const std::vector<std::pair<std::string, std::string>>& rejected,
+// scans: with their current world_from_scan (the root keeps its own).
+Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel);
 

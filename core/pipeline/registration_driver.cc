@@ -69,7 +69,14 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     if (it != done.end()) return it->second;
     progress.Report(std::min(1.0, double(done.size()) / (2.0 * std::max(1, n - 1))),
                     std::string(source.verb) + " " + scans[child].name + " to " + scans[parent].name);
-    PairResult& r = done.emplace(std::make_pair(parent, child), source.register_pair(parent, child)).first->second;
+    const auto kept = choices.kept.find({parent, child});
+    PairResult kept_result;
+    if (kept != choices.kept.end()) kept_result.link = kept->second;
+    PairResult& r = done.emplace(std::make_pair(parent, child), kept != choices.kept.end()
+                                                                    ? kept_result
+                                                                    : source.register_pair(parent, child))
+                        .first->second;
+    if (kept != choices.kept.end()) LogInfo(scans[child].name + " keeps its link to " + scans[parent].name + " (the user's)");
     LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(r.link.status) +
             (r.link.reason.empty() ? "" : " (" + r.link.reason + ")"));
     return r;
@@ -138,6 +145,7 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     for (int child : order.order) {
       const int parent = order.parent[child];
       if (parent < 0) continue;
+      if (choices.kept.count({parent, child})) continue;  // the user's link: never failed by a check
       const bool needs_loop = done.at({parent, child}).needs_loop;
       const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
       if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
@@ -255,6 +263,23 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         result->links.push_back(l);
       }
     if (Status g = RunGlobalRegistration(scans, cancel, result); !g) return g;
+    // The user's links hold exactly: the graph may not bend them. Parents first, each kept child
+    // and the scans under it move back onto its link.
+    auto under = [&](int d, int top) {
+      for (int steps = 0; d >= 0 && steps <= n; ++steps, d = order.parent[d])
+        if (d == top) return true;
+      return false;
+    };
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      const auto kept = choices.kept.find({parent, child});
+      if (parent < 0 || kept == choices.kept.end()) continue;
+      const Eigen::Isometry3d delta = result->scans[parent].world_from_scan * kept->second.parent_from_child *
+                                      result->scans[child].world_from_scan.inverse();
+      for (int d = 0; d < n; ++d)
+        if (result->scans[d].registered && under(d, child))
+          result->scans[d].world_from_scan = delta * result->scans[d].world_from_scan;
+    }
   }
   // Failed attempts, and the reason of each scan left out.
   for (const auto& [key, pr] : done) {

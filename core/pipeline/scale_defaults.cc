@@ -98,19 +98,19 @@ Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::ve
   return out;
 }
 
-double StartDistance(const std::vector<Scan>& scans, double d, double extent_m) {
+double StartDistance(const std::vector<const Scan*>& scans, double d, double extent_m) {
   const double reach = std::max(d, extent_m / 3.0);
   const int n = static_cast<int>(scans.size());
   std::vector<std::unique_ptr<PointIndex>> surface(n);
   std::vector<std::vector<Eigen::Vector3d>> probes(n);
   for (int i = 0; i < n; ++i) {
-    const std::vector<Eigen::Vector3d> pts = ValidPoints(scans[i]);
+    const std::vector<Eigen::Vector3d> pts = ValidPoints(*scans[i]);
     surface[i] = std::make_unique<PointIndex>(ThinEvenly(VoxelDownsample(pts, 0.5 * d), 200000));
-    for (const Eigen::Vector3d& p : ThinEvenly(pts, 1000)) probes[i].push_back(scans[i].world_from_scan * p);
+    for (const Eigen::Vector3d& p : ThinEvenly(pts, 1000)) probes[i].push_back(scans[i]->world_from_scan * p);
   }
   double out = d;
   for (int i = 0; i < n; ++i) {
-    const Eigen::Isometry3d parent_from_world = scans[i].world_from_scan.inverse();
+    const Eigen::Isometry3d parent_from_world = scans[i]->world_from_scan.inverse();
     for (int j = 0; j < n; ++j) {
       if (i == j || probes[j].empty()) continue;
       std::vector<double> near;

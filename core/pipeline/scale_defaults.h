@@ -41,6 +41,6 @@ Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::ve
 // which at least half of the child's points lie within reach (extent / 3) of the parent's surface,
 // the largest 2 x median distance of those points — misalignment, not sampling, dominates it; d
 // (the data's overlap distance) when the poses agree.
-double StartDistance(const std::vector<Scan>& scans, double d, double extent_m);
+double StartDistance(const std::vector<const Scan*>& scans, double d, double extent_m);
 
 }  // namespace scanreg::pipeline

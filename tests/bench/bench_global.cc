@@ -88,9 +88,9 @@ void Street(Table& table, bool quick) {
   pipeline::RegisterOptions global_options = tree_options;
   global_options.global = global_options.verify_all_links = true;  // as `register --global`
   Expected<pipeline::ProjectRegistration> tree =
-      pipeline::RegisterScans(*scans, {}, {}, tree_options, progress, cancel);
+      pipeline::RegisterScans(*scans, {}, tree_options, progress, cancel);
   Expected<pipeline::ProjectRegistration> global =
-      pipeline::RegisterScans(*scans, {}, {}, global_options, progress, cancel);
+      pipeline::RegisterScans(*scans, {}, global_options, progress, cancel);
   std::filesystem::remove_all(tree_options.feature_cache_dir);
   if (!tree || !global) {
     table.Add({kSection, "street", 0.0, "", "failed: " + (tree ? global : tree).error().ToString()});
@@ -203,7 +203,7 @@ void Bunny(Table& table, bool quick) {
     }
     for (bool global : {false, true}) {
       o.global = global;
-      Expected<pipeline::ProjectRegistration> r = pipeline::RegisterScans(scans, {}, {}, o, progress, cancel);
+      Expected<pipeline::ProjectRegistration> r = pipeline::RegisterScans(scans, {}, o, progress, cancel);
       if (!r) return table.Add({kSection, "bunny --coarse none", 0.0, "", "failed: " + r.error().ToString()});
       const Worst w = WorstError(*r, scans);
       Worst& acc = global ? global_worst : tree_worst;

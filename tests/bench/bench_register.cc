@@ -62,7 +62,7 @@ std::vector<const io::LinkRecord*> TreeLinks(const pipeline::ProjectRegistration
 Expected<pipeline::ProjectRegistration> Run(const std::vector<Scan>& scans, const pipeline::RegisterOptions& options) {
   NullProgress progress;
   CancelToken cancel;
-  return pipeline::RegisterScans(scans, std::vector<std::optional<std::string>>(scans.size()), {}, options, progress,
+  return pipeline::RegisterScans(scans, {}, options, progress,
                                  cancel);
 }
 

@@ -53,7 +53,7 @@ std::vector<Scan> Simulate(const Hard& h) {
 ProjectRegistration Register(const std::vector<Scan>& scans, const RegisterOptions& options) {
   NullProgress progress;
   CancelToken cancel;
-  Expected<ProjectRegistration> r = RegisterScans(scans, std::vector<std::optional<std::string>>(scans.size()), {},
+  Expected<ProjectRegistration> r = RegisterScans(scans, {},
                                                   options, progress, cancel);
   EXPECT_TRUE(r.ok()) << r.error().ToString();
   return r.ok() ? *r : ProjectRegistration{};

@@ -36,7 +36,7 @@ TEST(RealScans, PclRoomScansRegisterWithoutAnInitialGuess) {
 
   RegisterOptions o;  // defaults: no guess, no flags
   o.root = "room_scan1";
-  Expected<ProjectRegistration> found = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> found = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_TRUE(found.ok()) << found.error().ToString();
   ASSERT_TRUE(found->scans[1].registered) << found->scans[1].reason;
   const io::LinkRecord& link = found->links.front();
@@ -46,7 +46,7 @@ TEST(RealScans, PclRoomScansRegisterWithoutAnInitialGuess) {
   from_guess[1].world_from_scan = guess;
   RegisterOptions refine = o;
   refine.from_current_poses = true;
-  Expected<ProjectRegistration> refined = RegisterScans(from_guess, {}, {}, refine, progress, cancel);
+  Expected<ProjectRegistration> refined = RegisterScans(from_guess, {}, refine, progress, cancel);
   ASSERT_TRUE(refined.ok()) << refined.error().ToString();
   ASSERT_TRUE(refined->scans[1].registered) << refined->scans[1].reason;
 

@@ -98,7 +98,7 @@ TEST(RegisterFromCurrentPoses, LinksWhoseLoopsDoNotCloseAreFailedNotChained) {
   o.root = "bun000";
   NullProgress progress;
   CancelToken cancel;
-  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_TRUE(r.ok()) << r.error().ToString();
   int wrong = 0, unregistered = 0, loop_failures = 0;
   for (std::size_t i = 1; i < scans.size(); ++i) {
@@ -131,7 +131,7 @@ TEST(RegisterFromCurrentPoses, AFineStepThatCannotStartFailsTheLink) {
   o.root = "bun000";
   NullProgress progress;
   CancelToken cancel;
-  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_TRUE(r.ok()) << r.error().ToString();
   int stuck = 0;
   for (const io::LinkRecord& l : r->links) {
@@ -161,7 +161,7 @@ TEST(RegisterFromCurrentPoses, StanfordBunnyFromFiveDegreesWithDefaultOptions) {
     o.root = "bun000";
     NullProgress progress;
     CancelToken cancel;
-    Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+    Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
     ASSERT_TRUE(r.ok()) << r.error().ToString();
     std::vector<Eigen::Isometry3d> world;
     for (const ScanRegistration& s : r->scans) {
@@ -197,7 +197,7 @@ TEST(RegisterScans, StanfordBunnyFromIdentityByGeometryAlone) {
   ASSERT_EQ(scans.size(), 10u);
   RegisterOptions o;  // defaults
   o.root = "bun000";
-  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_TRUE(r.ok()) << r.error().ToString();
   std::vector<Eigen::Isometry3d> world;
   int registered = 0;
@@ -239,7 +239,7 @@ TEST(RegisterFromCurrentPoses, StanfordBunnyPerturbedBackToBunConf) {
   CancelToken cancel;
   for (bool global : {false, true}) {
     Expected<ProjectRegistration> r =
-        RegisterScans(scans, {}, {}, BunnyOptions(FineMethod::kEm, global), progress, cancel);
+        RegisterScans(scans, {}, BunnyOptions(FineMethod::kEm, global), progress, cancel);
     ASSERT_TRUE(r.ok()) << r.error().ToString();
     std::vector<Eigen::Isometry3d> world;
     for (const ScanRegistration& s : r->scans) {
@@ -278,11 +278,11 @@ TEST(RegisterFromCurrentPoses, RejectsKeypointsAndReportsScansWithoutOverlap) {
   o.fine = FineMethod::kKeypoints;
   NullProgress progress;
   CancelToken cancel;
-  Expected<ProjectRegistration> bad = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> bad = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("use em, projective-icp or dense"), std::string::npos) << bad.error().message;
   o.fine = FineMethod::kDense;
-  Expected<ProjectRegistration> r = RegisterScans(scans, {}, {}, o, progress, cancel);
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
   ASSERT_TRUE(r.ok()) << r.error().ToString();
   int registered = 0;
   for (const ScanRegistration& s : r->scans) registered += s.registered;
@@ -308,7 +308,7 @@ TEST(RegisterWithEm, SimulatedStreetReachesMillimetres) {
     const FineMethod fine = FineMethod::kEm;
     RegisterOptions o;
     o.fine = fine;
-    Expected<ProjectRegistration> r = RegisterScans(*scans, {}, {}, o, progress, cancel);
+    Expected<ProjectRegistration> r = RegisterScans(*scans, {}, o, progress, cancel);
     ASSERT_TRUE(r.ok()) << r.error().ToString();
     const std::vector<ReferenceError> errors = ReferenceErrors(*r, *scans);
     double worst = 0, worst_ang = 0;

@@ -40,7 +40,7 @@ Expected<ProjectRegistration> Register(const std::vector<Scan>& scans, const Reg
   overrides.resize(scans.size());
   NullProgress progress;
   CancelToken cancel;
-  return RegisterScans(scans, overrides, {}, options, progress, cancel);
+  return RegisterScans(scans, UserChoices{overrides, {}, {}}, options, progress, cancel);
 }
 
 // Error of a link's relative pose against the truth.
