@@ -7,6 +7,8 @@
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QInputDialog>
+#include <QLineEdit>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QPainter>
@@ -59,6 +61,7 @@ struct LoadedProject {
 struct AddedScans {
   io::Project project;
   std::vector<Scan> scans;
+  std::vector<std::string> skipped;  // why each file left out was left out
 };
 
 struct Registered {
@@ -262,15 +265,8 @@ void MainWindow::CreateMenus() {
   redo->setShortcut(QKeySequence::Redo);
   edit->addAction(undo);
   edit->addAction(redo);
-
-  QMenu* reg = menuBar()->addMenu(tr("&Registration"));
-  QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
-  run->setShortcut(Qt::CTRL | Qt::Key_R);
-  QAction* only_new = reg->addAction(tr("Register &unregistered scans"), this, [this] { RegisterUnregistered(); });
-  QAction* refine_all =
-      reg->addAction(tr("Refine all from &current poses"), this, [this] { RefineFromCurrentPoses(); });
-  reg->addSeparator();
-  // The selected scan (scan list).
+  edit->addSeparator();
+  // On the scan selected in the scan list (also its context menu).
   auto with_scan = [this](const QString& what, std::function<void(const QString&)> act) {
     return [this, what, act] {
       if (SelectedScan().isEmpty()) {
@@ -280,6 +276,29 @@ void MainWindow::CreateMenus() {
       act(SelectedScan());
     };
   };
+  QAction* rename = edit->addAction(tr("Re&name scan…"), this, with_scan(tr("Rename scan"), [this](const QString& s) {
+    bool ok = false;
+    const QString name = QInputDialog::getText(this, tr("Rename scan"), tr("New name of %1:").arg(s), QLineEdit::Normal, s, &ok);
+    if (ok && name != s) RenameScan(s, name);
+  }));
+  QAction* remove = edit->addAction(tr("Re&move scan"), this,
+                                    with_scan(tr("Remove scan"), [this](const QString& s) { RemoveScan(s); }));
+  QAction* relink = edit->addAction(tr("Re&link scan file…"), this, with_scan(tr("Relink scan file"), [this, scan_filter](const QString& s) {
+    const QString file = QFileDialog::getOpenFileName(this, tr("The file of %1").arg(s), LastDir(), scan_filter);
+    if (!file.isEmpty()) RelinkScan(s, file);
+  }));
+  QAction* root = edit->addAction(tr("Set as r&oot of the scan order"), this,
+                                  with_scan(tr("Set root"), [this](const QString& s) { SetRoot(s); }));
+  scan_list_->setContextMenuPolicy(Qt::ActionsContextMenu);
+  for (QAction* a : {rename, remove, relink, root}) scan_list_->addAction(a);
+
+  QMenu* reg = menuBar()->addMenu(tr("&Registration"));
+  QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
+  run->setShortcut(Qt::CTRL | Qt::Key_R);
+  QAction* only_new = reg->addAction(tr("Register &unregistered scans"), this, [this] { RegisterUnregistered(); });
+  QAction* refine_all =
+      reg->addAction(tr("Refine all from &current poses"), this, [this] { RefineFromCurrentPoses(); });
+  reg->addSeparator();
   QAction* pick = reg->addAction(tr("Align scan by &picked points…"), this,
                                  with_scan(tr("Align by picked points"), [this](const QString& s) { PickPoints(s); }));
   QAction* refine = reg->addAction(tr("Re&fine scan from its pose"), this,
@@ -290,7 +309,9 @@ void MainWindow::CreateMenus() {
                                               [this](const QString& s) { ReleaseHandPlacement(s); }));
   reg->addSeparator();
   QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
-  project_actions_ = {save, save_as, run, add, report, only_new, refine_all, pick, refine, edit_pose, release, settings};
+  for (QAction* a : {pick, refine, edit_pose, release}) scan_list_->addAction(a);
+  project_actions_ = {save,   save_as, run,  add,    report,    only_new, refine_all, pick,
+                      refine, rename,  remove, relink, root, edit_pose, release,  settings};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
@@ -320,10 +341,34 @@ void MainWindow::SetBusy(bool busy) {
   for (QAction* a : project_actions_) a->setEnabled(!busy && !project().scans.empty());
 }
 
-bool MainWindow::OpenProject(const QString& path) {
+bool MainWindow::OpenProject(const QString& path, const QString& scan_folder) {
   Expected<io::Project> project = io::LoadProject(path.toStdString());
   if (!project) {
     ShowError(tr("Cannot open project"), QString::fromStdString(project.error().message));
+    return false;
+  }
+  // Scan files that moved: looked for in scan_folder, or the user is asked for a folder.
+  const bool relinked = !scan_folder.isEmpty() && pipeline::RelinkFromFolder(*project, scan_folder.toStdString()) > 0;
+  const std::vector<std::string> missing = pipeline::MissingScanFiles(*project);
+  if (!missing.empty()) {
+    QStringList lines;
+    for (const std::string& name : missing)
+      lines << QString::fromStdString(name + ": " + project->scans[project->FindScan(name)].path.string());
+    auto* box = new QMessageBox(QMessageBox::Warning, tr("Scan files missing"),
+                                tr("%n scan file(s) of %1 are not where the project says:\n\n%2\n\nLocate the folder "
+                                   "that holds them (the project is relinked to it; save to keep the new paths).",
+                                   "", int(missing.size()))
+                                    .arg(path, lines.join("\n")),
+                                QMessageBox::Cancel, this);
+    box->setObjectName("MissingFilesDialog");
+    box->setAttribute(Qt::WA_DeleteOnClose);
+    QPushButton* locate = box->addButton(tr("Locate folder…"), QMessageBox::AcceptRole);
+    connect(locate, &QPushButton::clicked, this, [this, path] {
+      const QString dir = QFileDialog::getExistingDirectory(this, tr("Folder with the missing scan files"), LastDir());
+      if (!dir.isEmpty()) QTimer::singleShot(0, this, [this, path, dir] { OpenProject(path, dir); });
+    });
+    LogWarning(QString("%1: %2 scan file(s) missing").arg(path).arg(missing.size()).toStdString());
+    box->open();
     return false;
   }
   return jobs_->Start<LoadedProject>(
@@ -331,7 +376,10 @@ bool MainWindow::OpenProject(const QString& path) {
       [p = std::move(*project)](ProgressSink& progress, const CancelToken& cancel) {
         return LoadJob(p, progress, cancel);
       },
-      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans)); });
+      [this, relinked](LoadedProject& loaded) {
+        OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans));
+        if (relinked) doc_->MarkChanged();  // the new paths are not saved yet
+      });
 }
 
 void MainWindow::OnProjectLoaded(io::Project project, std::vector<Scan> scans) {
@@ -768,6 +816,67 @@ void MainWindow::FillRecentMenu(QMenu* menu) {
   if (menu->isEmpty()) menu->addAction(tr("(no recent projects)"))->setEnabled(false);
 }
 
+bool MainWindow::RemoveScan(const QString& scan) {
+  io::Project after = project();
+  Expected<std::vector<std::string>> orphans = pipeline::RemoveScan(scan.toStdString(), after);
+  if (!orphans) {
+    ShowError(tr("Remove scan"), QString::fromStdString(orphans.error().message));
+    return false;
+  }
+  doc_->Edit(tr("remove %1").arg(scan), std::move(after));
+  QString said = tr("Removed %1 (Edit → Undo brings it back)").arg(scan);
+  if (!orphans->empty()) {
+    QStringList names;
+    for (const std::string& n : *orphans) names << QString::fromStdString(n);
+    said += tr("; %1 were registered through it and keep their poses without a link: register again to link them")
+                .arg(names.join(", "));
+  }
+  LogInfo(said.toStdString());
+  statusBar()->showMessage(said, 12000);
+  return true;
+}
+
+bool MainWindow::RenameScan(const QString& scan, const QString& new_name) {
+  io::Project after = project();
+  if (Status s = pipeline::RenameScan(scan.toStdString(), new_name.trimmed().toStdString(), after); !s) {
+    ShowError(tr("Rename scan"), QString::fromStdString(s.error().message));
+    return false;
+  }
+  doc_->Edit(tr("rename %1 to %2").arg(scan, new_name.trimmed()), std::move(after));
+  return true;
+}
+
+bool MainWindow::SetRoot(const QString& scan) {
+  io::Project after = project();
+  if (Status s = pipeline::SetRoot(scan.toStdString(), after); !s) {
+    ShowError(tr("Set root"), QString::fromStdString(s.error().message));
+    return false;
+  }
+  doc_->Edit(tr("make %1 the root").arg(scan), std::move(after));
+  statusBar()->showMessage(tr("%1 is the root: the next registration keeps its pose and places the others from it").arg(scan), 12000);
+  return true;
+}
+
+bool MainWindow::RelinkScan(const QString& scan, const QString& file) {
+  const int s = project().FindScan(scan.toStdString());
+  if (s < 0) return false;
+  struct Relinked {
+    io::Project project;
+    Scan scan;
+  };
+  return jobs_->Start<Relinked>(
+      tr("Relinking %1").arg(scan),
+      [project = project(), current = scans()[s], name = scan.toStdString(), path = file.toStdString()](
+          ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Relinked> {
+        Expected<Scan> read = pipeline::RelinkScan(project, name, path, &current, progress, cancel);
+        if (!read) return read.error();
+        return Relinked{std::move(project), std::move(*read)};
+      },
+      [this, scan, file](Relinked& r) {
+        doc_->EditWithScan(tr("relink %1 to %2").arg(scan, file), std::move(r.project), std::move(r.scan));
+      });
+}
+
 bool MainWindow::NewProject(const QStringList& scan_files, const QString& project_path) {
   std::vector<std::filesystem::path> files;
   for (const QString& f : scan_files) files.push_back(f.toStdString());
@@ -777,10 +886,13 @@ bool MainWindow::NewProject(const QStringList& scan_files, const QString& projec
         pipeline::CreateProjectOptions options;
         options.scan_files = files;
         options.keep_scans = true;
+        options.skip_unreadable = true;  // one bad file does not stop the others
         return pipeline::CreateProject(path, options, progress, cancel);
       },
       [this](pipeline::CreatedProject& created) {
+        const std::vector<std::string> skipped = std::move(created.skipped);
         OnProjectLoaded(std::move(created.project), std::move(created.scans));
+        ShowSkippedFiles(skipped);
       });
 }
 
@@ -794,11 +906,23 @@ bool MainWindow::AddScans(const QStringList& scan_files) {
   return jobs_->Start<AddedScans>(
       tr("Adding scans"),
       [files, project = project()](ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<AddedScans> {
-        Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel);
+        std::vector<std::string> skipped;
+        Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel, &skipped);
         if (!scans) return scans.error();
-        return AddedScans{std::move(project), std::move(*scans)};
+        return AddedScans{std::move(project), std::move(*scans), std::move(skipped)};
       },
-      [this](AddedScans& added) { doc_->AppendScans(std::move(added.project), std::move(added.scans)); });
+      [this](AddedScans& added) {
+        if (!added.scans.empty()) doc_->AppendScans(std::move(added.project), std::move(added.scans));
+        ShowSkippedFiles(added.skipped);
+      });
+}
+
+void MainWindow::ShowSkippedFiles(const std::vector<std::string>& skipped) {
+  if (skipped.empty()) return;
+  QString list;
+  for (const std::string& why : skipped) list += "• " + QString::fromStdString(why) + "\n";
+  ShowError(tr("%n file(s) not added", "", int(skipped.size())),
+            tr("The other files were added. These were left out:\n\n%1").arg(list));
 }
 
 bool MainWindow::ExportReport(const QString& dir) {

@@ -46,7 +46,9 @@ class MainWindow : public QMainWindow {
 
   // Start jobs (return false while another job runs). Completion: jobs()->Succeeded / Failed; the
   // result is in document() by then.
-  bool OpenProject(const QString& path);
+  // Scan files not where the project says are looked for in scan_folder (by file name); those still
+  // missing are listed in a dialog that asks for the folder (and opens again with it).
+  bool OpenProject(const QString& path, const QString& scan_folder = QString());
   bool OpenDemoProject(const QString& dir);  // simulates a small street project into dir
   bool RegisterProject();
   // Synchronous and atomic, under the project's lock; a project changed on disk since it was read
@@ -68,6 +70,13 @@ class MainWindow : public QMainWindow {
   // scans added to the open project (unsaved until Save). Both read the files on the worker.
   bool NewProject(const QStringList& scan_files, const QString& project_path);
   bool AddScans(const QStringList& scan_files);
+  // Project management (issue 14, item 6), undoable; false with a dialog when refused. Removing a
+  // scan keeps the poses of the scans registered through it (the status bar names them).
+  bool RemoveScan(const QString& scan);
+  bool RenameScan(const QString& scan, const QString& new_name);
+  bool SetRoot(const QString& scan);
+  // Points the scan at another file (read on the worker; refused when it holds another grid).
+  bool RelinkScan(const QString& scan, const QString& file);
   // Writes the registration report (dir/index.html and its pictures) on the worker.
   bool ExportReport(const QString& dir);
   // With unsaved changes, asks whether to save them; false when the user cancels (or saving failed).
@@ -141,6 +150,7 @@ class MainWindow : public QMainWindow {
   void CreateDocks();
   void OnProjectLoaded(io::Project project, std::vector<Scan> scans);  // opened, created or simulated
   void UpdateTitle();
+  void ShowSkippedFiles(const std::vector<std::string>& skipped);  // batch add: the files left out, and why
   void ReportRegistration();  // the run's summary: log, and the status bar until the next job
   bool StartRegistration(const QString& text, pipeline::RegisterOptions options, bool store_settings);
   // Runs a pair result job and makes its link the child's (Refine scan, picked points).

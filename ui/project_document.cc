@@ -60,13 +60,37 @@ void ProjectDocument::NotifyDirty() {
 }
 
 void ProjectDocument::SyncPoses() {
-  for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i)
+  for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i) {
     scans_[i].world_from_scan = project_.scans[i].world_from_scan;
+    scans_[i].name = project_.scans[i].name;
+  }
+}
+
+void ProjectDocument::SyncScans(const io::Project& before) {
+  bool same = before.scans.size() == project_.scans.size();
+  for (std::size_t i = 0; same && i < project_.scans.size(); ++i) same = KeyOf(before.scans[i]) == KeyOf(project_.scans[i]);
+  if (!same) {
+    for (std::size_t i = 0; i < scans_.size() && i < before.scans.size(); ++i)
+      set_aside_[KeyOf(before.scans[i])] = std::move(scans_[i]);
+    scans_.clear();
+    for (const io::ProjectScan& ps : project_.scans) {
+      auto it = set_aside_.find(KeyOf(ps));
+      if (it == set_aside_.end()) {  // cannot happen: every scan of an edit was read before
+        scans_.emplace_back(ps.name, 0, 0);
+        continue;
+      }
+      scans_.push_back(std::move(it->second));
+      set_aside_.erase(it);
+    }
+  }
+  SyncPoses();
+  if (!same) emit ScansChanged();
 }
 
 void ProjectDocument::Open(io::Project project, std::vector<Scan> scans) {
   project_ = std::move(project);
   scans_ = std::move(scans);
+  set_aside_.clear();
   SyncPoses();
   const Eigen::MatrixXi* saved = project_.CurrentConfusion();  // from the last registration, if any
   confusion_ = saved ? *saved : Eigen::MatrixXi();
@@ -96,6 +120,12 @@ void ProjectDocument::Edit(const QString& text, io::Project after, bool rerun) {
   undo_->push(new SnapshotCommand(this, text, project_, std::move(after), confusion_, confusion_, rerun, false));
 }
 
+void ProjectDocument::EditWithScan(const QString& text, io::Project after, Scan scan) {
+  for (const io::ProjectScan& ps : after.scans)
+    if (ps.name == scan.name) set_aside_[KeyOf(ps)] = std::move(scan);
+  Edit(text, std::move(after));
+}
+
 void ProjectDocument::ApplyRegistration(const QString& text, io::Project after, Eigen::MatrixXi confusion) {
   // Merged into the edit that asked for this run, when that edit is the last step.
   undo_->push(
@@ -105,13 +135,19 @@ void ProjectDocument::ApplyRegistration(const QString& text, io::Project after, 
 void ProjectDocument::Replace(const io::Project& project, const Eigen::MatrixXi& confusion) {
   const std::filesystem::path file = project_.file;
   const std::uint64_t digest = project_.disk_digest;
+  const io::Project before = std::move(project_);
   project_ = project;
   project_.file = file;  // where the project lives is not part of an edit
   project_.disk_digest = digest;
   confusion_ = confusion;
-  SyncPoses();
+  SyncScans(before);
   emit PosesChanged();
   emit Changed();
+  NotifyDirty();
+}
+
+void ProjectDocument::MarkChanged() {
+  scans_added_ = true;
   NotifyDirty();
 }
 

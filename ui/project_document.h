@@ -9,6 +9,8 @@
 #include <QString>
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include "core/geometry/scan.h"
@@ -41,14 +43,19 @@ class ProjectDocument : public QObject {
   // An undoable edit from the current project to `after` (an override, a decision, a pose, a
   // registration's result). rerun: the registration should run again after it (not on undo/redo).
   void Edit(const QString& text, io::Project after, bool rerun = false);
+  // An undoable edit that points a scan at another file (relink): `scan` holds the points read from
+  // it, kept for as long as the project is open (undo points back to the old file's points).
+  void EditWithScan(const QString& text, io::Project after, Scan scan);
   // A registration's result: an undoable edit that also replaces the confusion matrix.
   void ApplyRegistration(const QString& text, io::Project after, Eigen::MatrixXi confusion);
+  // The project differs from its file though nothing was edited (relinked while opening).
+  void MarkChanged();
   // The project was written to `file` with this content digest: clean from here.
   void MarkSaved(const std::filesystem::path& file, std::uint64_t digest);
 
  signals:
   void Opened();            // a different project: views reset their camera and panels
-  void ScansChanged();      // scans were added (clouds to build)
+  void ScansChanged();      // scans were added, removed or relinked (clouds to build)
   void PosesChanged();      // poses changed: derived results (a merged mesh) no longer match
   void Changed();           // anything shown changed: redraw
   void DirtyChanged(bool dirty);
@@ -57,14 +64,20 @@ class ProjectDocument : public QObject {
  private:
   friend class SnapshotCommand;
   void Replace(const io::Project& project, const Eigen::MatrixXi& confusion);  // undo / redo
+  // scans_ follows project_: each scan's points by (file, index in file), from the scans shown or
+  // the ones kept aside (a removed scan, an old file after relink: undo brings them back).
+  using ScanKey = std::pair<std::filesystem::path, int>;
+  static ScanKey KeyOf(const io::ProjectScan& s) { return {s.path, s.index_in_file}; }
+  void SyncScans(const io::Project& before);
   void SyncPoses();
   void NotifyDirty();
 
   io::Project project_;
   std::vector<Scan> scans_;
+  std::map<ScanKey, Scan> set_aside_;
   Eigen::MatrixXi confusion_;
   QUndoStack* undo_ = nullptr;
-  bool scans_added_ = false;  // since the last save or load
+  bool scans_added_ = false;  // scans added or files relinked since the last save or load (not undoable)
   bool was_dirty_ = false;
 };
 

@@ -249,11 +249,8 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       }
       scan.path = fs::path(s.at("path").get<std::string>());
       if (scan.path.is_relative()) scan.path = (base / scan.path).lexically_normal();
-      std::error_code ec;
-      if (!fs::is_regular_file(scan.path, ec)) {
-        return MakeError(ErrorCode::kNotFound, label + ": scan file '" + scan.path.string() +
-                                                   "' is missing; move it back or remove the scan from the project");
-      }
+      // A missing scan file is not an error here: the project can still be read, and relinked
+      // (pipeline::MissingScanFiles); loading the scans' points names it.
       scan.index_in_file = s.value("index_in_file", 0);
       scan.registered = s.value("registered", false);
       if (s.contains("world_from_scan")) {

@@ -95,21 +95,46 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
 }  // namespace
 
 Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
-                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel) {
+                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel,
+                                            std::vector<std::string>* skipped) {
   io::Project result = project;
   std::set<std::string> names;
   for (const io::ProjectScan& s : result.scans) names.insert(s.name);
   std::vector<Scan> read;
+  // A problem with one file: an error, or with `skipped` a line of the list and the next file.
+  auto refuse = [&](Error e) -> bool {
+    if (!skipped || e.code == ErrorCode::kCancelled) return false;
+    skipped->push_back(e.message);
+    return true;
+  };
   for (std::size_t f = 0; f < scan_files.size(); ++f) {
     const std::filesystem::path path = std::filesystem::absolute(scan_files[f]).lexically_normal();
+    std::string already;
+    for (const io::ProjectScan& s : result.scans)
+      if (s.path == path) already = s.name;
+    if (!already.empty()) {
+      Error e = MakeError(ErrorCode::kInvalidArgument,
+                          "'" + path.string() + "' is already in the project (scan '" + already + "'); not added again");
+      if (refuse(e)) continue;
+      return e;
+    }
     SubProgress sub(progress, double(f) / scan_files.size(), double(f + 1) / scan_files.size());
     Expected<std::vector<Scan>> scans = io::ReadScanFile(path, sub, cancel);
-    if (!scans) return scans.error();
-    for (std::size_t k = 0; k < scans->size(); ++k) {
+    if (!scans) {
+      if (refuse(scans.error())) continue;
+      return scans.error();
+    }
+    const std::size_t first_new = result.scans.size();
+    const std::set<std::string> names_before = names;
+    bool bad_file = false;
+    for (std::size_t k = 0; k < scans->size() && !bad_file; ++k) {
       Scan& scan = (*scans)[k];
       if (scan.CountValid() == 0) {
-        return MakeError(ErrorCode::kInvalidArgument, "scan '" + scan.name + "' in '" + path.string() +
-                                                          "' has no valid point; remove it from the list");
+        Error e = MakeError(ErrorCode::kInvalidArgument, "scan '" + scan.name + "' in '" + path.string() +
+                                                             "' has no valid point; remove it from the list");
+        if (!refuse(e)) return e;
+        bad_file = true;  // the file's other scans go too: it is added whole or not at all
+        continue;
       }
       io::ProjectScan ps;
       ps.name = scan.name;
@@ -123,6 +148,11 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
       scan.name = ps.name;
       result.scans.push_back(std::move(ps));
       if (keep_scans) read.push_back(std::move(scan));
+    }
+    if (bad_file) {
+      if (keep_scans) read.resize(read.size() - (result.scans.size() - first_new));
+      result.scans.resize(first_new);
+      names = names_before;
     }
   }
   // A single scan is its own frame: nothing to register it to, and it can be merged and exported.
@@ -138,8 +168,15 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
   }
   io::Project project;
   project.file = std::filesystem::absolute(project_path);
-  Expected<std::vector<Scan>> scans = AppendScanFiles(project, options.scan_files, options.keep_scans, progress, cancel);
+  std::vector<std::string> skipped;
+  Expected<std::vector<Scan>> scans = AppendScanFiles(project, options.scan_files, options.keep_scans, progress, cancel,
+                                                      options.skip_unreadable ? &skipped : nullptr);
   if (!scans) return scans.error();
+  if (project.scans.empty()) {
+    std::string all;
+    for (const std::string& why : skipped) all += "\n  " + why;
+    return MakeError(ErrorCode::kInvalidArgument, "no scan file could be added:" + all);
+  }
   for (const auto& [file, reference] :
        {std::make_pair(options.poses, false), std::make_pair(options.reference_poses, true)}) {
     if (!file) continue;
@@ -148,7 +185,7 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
     if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
   }
   if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return s.error();
-  return CreatedProject{std::move(project), std::move(*scans)};
+  return CreatedProject{std::move(project), std::move(*scans), std::move(skipped)};
 }
 
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,

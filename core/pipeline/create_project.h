@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -22,11 +23,15 @@ struct CreateProjectOptions {
   std::optional<std::filesystem::path> poses;
   std::optional<std::filesystem::path> reference_poses;
   bool keep_scans = false;  // return the scans read (the GUI shows them); else only the project
+  // Files that cannot be added (unreadable, a scan without points, already in the project) are left
+  // out and listed in CreatedProject::skipped (the GUI); otherwise the first one is the error (the CLI).
+  bool skip_unreadable = false;
 };
 
 struct CreatedProject {
   io::Project project;      // as saved (disk_digest set)
   std::vector<Scan> scans;  // with keep_scans: in project order; else empty
+  std::vector<std::string> skipped;  // with skip_unreadable: why each file left out was left out
 };
 
 // Every pose format `export-poses` writes, by extension: Stanford .conf, poses .json, poses .csv,
@@ -44,9 +49,13 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
 // uniquely within the project (a suffix on collision), its pose from the file (imported when the
 // file holds a registered pose; a project of one scan has that scan in place). With keep_scans,
 // returns the scans read, in the order appended, named as in the project (otherwise an empty
-// list: each file's points are dropped once checked). On error `project` is unchanged.
+// list: each file's points are dropped once checked). A file already in the project is refused
+// (not added twice). Without `skipped`, the first file that cannot be added is the error and
+// `project` is unchanged; with it, every such file is left out (whole) with its reason listed there
+// and the others are added (batch add: one bad file does not stop the rest).
 Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
-                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel);
+                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel,
+                                            std::vector<std::string>* skipped = nullptr);
 
 // Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
 // header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose

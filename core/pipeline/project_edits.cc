@@ -158,4 +158,68 @@ Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector
   return out;
 }
 
+Expected<std::vector<std::string>> RemoveScan(const std::string& scan, io::Project& project) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  std::vector<std::string> orphans;
+  for (const io::LinkRecord& l : project.links)
+    if (IsTreeLink(l) && l.parent == scan) orphans.push_back(l.child);
+  if (const Eigen::MatrixXi* c = project.CurrentConfusion()) {
+    Eigen::MatrixXi kept(c->rows() - 1, c->cols() - 1);
+    for (int i = 0, r = 0; i < c->rows(); ++i) {
+      if (i == s) continue;
+      for (int k = 0, q = 0; k < c->cols(); ++k)
+        if (k != s) kept(r, q++) = (*c)(i, k);
+      ++r;
+    }
+    project.confusion = kept;
+    project.confusion_scans.erase(project.confusion_scans.begin() + s);
+  } else {
+    project.confusion.resize(0, 0);
+    project.confusion_scans.clear();
+  }
+  project.scans.erase(project.scans.begin() + s);
+  project.links.erase(std::remove_if(project.links.begin(), project.links.end(),
+                                     [&](const io::LinkRecord& l) { return l.parent == scan || l.child == scan; }),
+                      project.links.end());
+  for (io::ProjectScan& p : project.scans)
+    if (p.parent_override == scan) p.parent_override.reset();
+  if (project.root == scan) project.root.reset();
+  return orphans;
+}
+
+Status RenameScan(const std::string& scan, const std::string& new_name, io::Project& project) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  if (new_name.empty() || new_name.size() > 200 ||
+      std::any_of(new_name.begin(), new_name.end(), [](unsigned char c) { return c < 0x20 || c == 0x7f; })) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "a scan name must be 1 to 200 printable characters; choose another name for '" + scan + "'");
+  }
+  if (new_name == scan) return Status::Ok();
+  if (project.FindScan(new_name) >= 0) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "another scan is already named '" + new_name + "'; choose a name no scan has");
+  }
+  project.scans[s].name = new_name;
+  for (io::LinkRecord& l : project.links) {
+    if (l.parent == scan) l.parent = new_name;
+    if (l.child == scan) l.child = new_name;
+  }
+  for (io::ProjectScan& p : project.scans)
+    if (p.parent_override == scan) p.parent_override = new_name;
+  if (project.root == scan) project.root = new_name;
+  for (std::string& n : project.confusion_scans)
+    if (n == scan) n = new_name;
+  return Status::Ok();
+}
+
+Status SetRoot(const std::string& scan, io::Project& project) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  project.root = scan;
+  project.scans[s].parent_override.reset();
+  return Status::Ok();
+}
+
 }  // namespace scanreg::pipeline

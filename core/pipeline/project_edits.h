@@ -38,6 +38,18 @@ Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_
 // placed by hand.
 Status ReleaseHandPlacement(const std::string& scan, io::Project& project);
 
+// Project management (issue 14, item 6). Each names the scan and what to do when it refuses.
+// Removes a scan with its links, the overrides naming it, its confusion row and column (the root
+// moves to no scan when it was the root). The scans registered through it keep their poses, without
+// a link to it: returned by name, so that the user can be told to register them again.
+Expected<std::vector<std::string>> RemoveScan(const std::string& scan, io::Project& project);
+// Renames a scan everywhere the project names it (links, overrides, root, confusion). The new name
+// must be non-empty, printable, at most 200 characters and not another scan's.
+Status RenameScan(const std::string& scan, const std::string& new_name, io::Project& project);
+// Makes `scan` the root of the scan order (its parent override goes: the root has no parent). The
+// root keeps its pose in the next registration; the others are placed relative to it.
+Status SetRoot(const std::string& scan, io::Project& project);
+
 // Registers `child` to `parent` (a parent override; none: let the registration choose again),
 // re-registering only the child and the scans registered through it; every other scan keeps its
 // pose and link. When the forced link fails and the child had a link before, the project is left

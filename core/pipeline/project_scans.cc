@@ -16,6 +16,13 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
     const io::ProjectScan& ps = project.scans[i];
     SubProgress sub(progress, double(i) / project.scans.size(), double(i + 1) / project.scans.size());
     auto it = files.find(ps.path);
+    std::error_code ec;
+    if (it == files.end() && !std::filesystem::is_regular_file(ps.path, ec)) {
+      return MakeError(ErrorCode::kNotFound, "scan '" + ps.name + "': scan file '" + ps.path.string() +
+                                                 "' is missing; move it back, or open the project in scanreg "
+                                                 "(it offers to look for the missing files in a folder), or "
+                                                 "remove the scan from the project");
+    }
     if (it == files.end()) {
       Expected<std::vector<Scan>> read = io::ReadScanFile(ps.path, sub, cancel);
       if (!read) return read.error();
@@ -35,6 +42,55 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
   }
   progress.Report(1.0, "scans loaded");
   return scans;
+}
+
+std::vector<std::string> MissingScanFiles(const io::Project& project) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const io::ProjectScan& s : project.scans)
+    if (!std::filesystem::is_regular_file(s.path, ec)) out.push_back(s.name);
+  return out;
+}
+
+int RelinkFromFolder(io::Project& project, const std::filesystem::path& folder) {
+  int found = 0;
+  std::error_code ec;
+  for (io::ProjectScan& s : project.scans) {
+    if (std::filesystem::is_regular_file(s.path, ec)) continue;
+    const std::filesystem::path candidate = std::filesystem::absolute(folder / s.path.filename()).lexically_normal();
+    if (!std::filesystem::is_regular_file(candidate, ec)) continue;
+    s.path = candidate;
+    ++found;
+  }
+  return found;
+}
+
+Expected<Scan> RelinkScan(io::Project& project, const std::string& scan, const std::filesystem::path& file,
+                          const Scan* current, ProgressSink& progress, const CancelToken& cancel) {
+  const int s = project.FindScan(scan);
+  if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
+  const std::filesystem::path path = std::filesystem::absolute(file).lexically_normal();
+  Expected<std::vector<Scan>> read = io::ReadScanFile(path, progress, cancel);
+  if (!read) return read.error();
+  io::ProjectScan& ps = project.scans[s];
+  if (ps.index_in_file >= static_cast<int>(read->size())) {
+    return MakeError(ErrorCode::kInvalidArgument, "'" + path.string() + "' holds " + std::to_string(read->size()) +
+                                                      " scan(s); '" + scan + "' was scan number " +
+                                                      std::to_string(ps.index_in_file + 1) +
+                                                      " of its file: choose the file it came from");
+  }
+  Scan out = std::move((*read)[ps.index_in_file]);
+  if (current && (current->rows != out.rows || current->cols != out.cols)) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "'" + path.string() + "' holds a " + std::to_string(out.rows) + " x " + std::to_string(out.cols) +
+                         " scan; '" + scan + "' is " + std::to_string(current->rows) + " x " +
+                         std::to_string(current->cols) + ": not the same scan");
+  }
+  ps.path = path;
+  out.name = ps.name;
+  out.world_from_scan = ps.world_from_scan;
+  out.reference_world_from_scan = ps.reference_world_from_scan;
+  return out;
 }
 
 }  // namespace scanreg::pipeline

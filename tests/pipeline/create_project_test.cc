@@ -5,6 +5,8 @@
 #include "core/io/pose_csv.h"
 #include "core/io/ptx.h"
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_edits.h"
+#include "core/pipeline/project_scans.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg::pipeline {
@@ -67,7 +69,8 @@ TEST(AppendScanFiles, ErrorNamesTheFileAndLeavesTheProjectUnchanged) {
   io::Project project;
   NullProgress progress;
   ASSERT_TRUE(AppendScanFiles(project, {ab}, false, progress, CancelToken()).ok());
-  auto bad = AppendScanFiles(project, {ab, dir / "missing.ptx"}, true, progress, CancelToken());
+  const auto c = WritePtxFile(dir, "c.ptx", {PlaneScan("c", 3.0)});
+  auto bad = AppendScanFiles(project, {c, dir / "missing.ptx"}, true, progress, CancelToken());
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("missing.ptx"), std::string::npos) << bad.error().message;
   EXPECT_EQ(project.scans.size(), 2u);
@@ -76,9 +79,10 @@ TEST(AppendScanFiles, ErrorNamesTheFileAndLeavesTheProjectUnchanged) {
 TEST(CreateProject, SavesTheProjectWithEveryScan) {
   test::TempDir dir;
   const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
+  const auto ab2 = WritePtxFile(dir, "ab2.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
   NullProgress progress;
   CreateProjectOptions options;
-  options.scan_files = {ab, ab};
+  options.scan_files = {ab, ab2};
   options.keep_scans = true;  // as the GUI creates a project: the scans come back, named as in it
   auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
   ASSERT_TRUE(project.ok()) << project.error().message;
@@ -90,7 +94,48 @@ TEST(CreateProject, SavesTheProjectWithEveryScan) {
   auto loaded = io::LoadProject(dir / "p.scanreg.json");
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   ASSERT_EQ(loaded->scans.size(), 4u);
-  EXPECT_EQ(loaded->scans[3].name, "ab_2_2");
+  EXPECT_EQ(loaded->scans[3].name, "ab2_2");
+
+  // The same file twice is noticed: an error naming it (CLI), or left out and listed (GUI).
+  options.scan_files = {ab, ab};
+  auto twice = CreateProject(dir / "q.scanreg.json", options, progress, CancelToken());
+  ASSERT_FALSE(twice.ok());
+  EXPECT_NE(twice.error().message.find("already in the project"), std::string::npos) << twice.error().message;
+  options.skip_unreadable = true;
+  auto listed = CreateProject(dir / "q.scanreg.json", options, progress, CancelToken());
+  ASSERT_TRUE(listed.ok()) << listed.error().message;
+  EXPECT_EQ(listed->project.scans.size(), 2u);
+  ASSERT_EQ(listed->skipped.size(), 1u);
+  EXPECT_NE(listed->skipped[0].find("ab.ptx"), std::string::npos) << listed->skipped[0];
+}
+
+// Batch add (issue 14): every readable file is added, every other one is listed with its reason.
+TEST(AppendScanFiles, BatchAddAddsEveryReadableFileAndListsEveryError) {
+  test::TempDir dir;
+  const auto a = WritePtxFile(dir, "a.ptx", {PlaneScan("a", 1.0)});
+  const auto b = WritePtxFile(dir, "b.ptx", {PlaneScan("b", 2.0)});
+  const std::filesystem::path garbage = dir / "garbage.ptx";
+  std::FILE* f = std::fopen(garbage.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("20\n10\nnot a number\n", f);
+  std::fclose(f);
+  Scan empty("e", 4, 4);
+  const auto no_points = WritePtxFile(dir, "empty.ptx", {PlaneScan("c", 3.0), empty});
+  io::Project project;
+  NullProgress progress;
+  std::vector<std::string> skipped;
+  auto scans = AppendScanFiles(project, {a, dir / "missing.ptx", garbage, no_points, b, a}, true, progress,
+                               CancelToken(), &skipped);
+  ASSERT_TRUE(scans.ok()) << scans.error().message;
+  ASSERT_EQ(project.scans.size(), 2u);
+  EXPECT_EQ(project.scans[0].name, "a");
+  EXPECT_EQ(project.scans[1].name, "b");
+  EXPECT_EQ(scans->size(), 2u);
+  ASSERT_EQ(skipped.size(), 4u);
+  EXPECT_NE(skipped[0].find("missing.ptx"), std::string::npos) << skipped[0];
+  EXPECT_NE(skipped[1].find("garbage.ptx"), std::string::npos) << skipped[1];
+  EXPECT_NE(skipped[2].find("no valid point"), std::string::npos) << skipped[2];
+  EXPECT_NE(skipped[3].find("already in the project"), std::string::npos) << skipped[3];
 }
 
 // A pose read from a file is used as it is: the scan is 'imported' (registered, no link evidence).
@@ -154,6 +199,74 @@ TEST(CreateProject, HeaderPosesAreImportedAndASingleScanIsInPlace) {
   ASSERT_TRUE(one.ok()) << one.error().message;
   ASSERT_EQ(one->project.scans.size(), 1u);
   EXPECT_EQ(io::ScanPoseState(one->project.scans[0]), io::PoseState::kRegistered);
+}
+
+// Project management (issue 14): rename, remove, set the root, move the files and relink them,
+// through save and reopen.
+TEST(ProjectManagement, RemoveRenameRelinkRoundTripThroughSaveAndReopen) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir / "A");
+  const auto a = WritePtxFile(dir, "A/a.ptx", {PlaneScan("a", 1.0)});
+  const auto b = WritePtxFile(dir, "A/b.ptx", {PlaneScan("b", 2.0)});
+  const auto c = WritePtxFile(dir, "A/c.ptx", {PlaneScan("c", 3.0)});
+  NullProgress progress;
+  CreateProjectOptions options;
+  options.scan_files = {a, b, c};
+  auto created = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
+  ASSERT_TRUE(created.ok()) << created.error().message;
+  io::Project project = created->project;
+  project.scans[2].parent_override = "b";
+  ASSERT_TRUE(RenameScan("b", "north", project).ok());
+  EXPECT_EQ(project.scans[2].parent_override.value_or(""), "north");
+  EXPECT_FALSE(RenameScan("a", "north", project).ok()) << "names stay unique";
+  EXPECT_FALSE(RenameScan("a", "", project).ok());
+  EXPECT_FALSE(RenameScan("a", "bad\nname", project).ok());
+  Expected<std::vector<std::string>> orphans = RemoveScan("c", project);
+  ASSERT_TRUE(orphans.ok());
+  EXPECT_FALSE(RemoveScan("c", project).ok());
+  ASSERT_TRUE(SetRoot("north", project).ok());
+  ASSERT_TRUE(io::SaveProject(project, dir / "p.scanreg.json").ok());
+
+  // The scan files move to another folder: the project finds them there.
+  std::filesystem::rename(dir / "A", dir / "B");
+  auto moved = io::LoadProject(dir / "p.scanreg.json");
+  ASSERT_TRUE(moved.ok()) << moved.error().message;
+  EXPECT_EQ(MissingScanFiles(*moved), (std::vector<std::string>{"a", "north"}));
+  Expected<std::vector<Scan>> not_there = LoadProjectScans(*moved, progress, CancelToken());
+  ASSERT_FALSE(not_there.ok());
+  EXPECT_EQ(not_there.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(not_there.error().message.find("scan 'a'"), std::string::npos) << not_there.error().message;
+  EXPECT_NE(not_there.error().message.find("A/a.ptx"), std::string::npos) << not_there.error().message;
+  EXPECT_EQ(RelinkFromFolder(*moved, dir / "B"), 2);
+  EXPECT_TRUE(MissingScanFiles(*moved).empty());
+  ASSERT_TRUE(io::SaveProject(*moved, dir / "p.scanreg.json").ok());
+
+  auto reopened = io::LoadProject(dir / "p.scanreg.json");
+  ASSERT_TRUE(reopened.ok()) << reopened.error().message;
+  ASSERT_EQ(reopened->scans.size(), 2u);
+  EXPECT_EQ(reopened->scans[0].name, "a");
+  EXPECT_EQ(reopened->scans[1].name, "north");
+  EXPECT_EQ(reopened->root.value_or(""), "north");
+  EXPECT_EQ(reopened->scans[1].path, std::filesystem::absolute(dir / "B" / "b.ptx").lexically_normal());
+  auto scans = LoadProjectScans(*reopened, progress, CancelToken());
+  ASSERT_TRUE(scans.ok()) << scans.error().message;
+  EXPECT_EQ((*scans)[1].name, "north");
+  EXPECT_NEAR((*scans)[1].world_from_scan.translation().x(), 2.0, 1e-9);
+
+  // Relinking one scan to a file that holds another scan (another grid) is refused and changes nothing.
+  Scan other("x", 5, 5);
+  other.Set(0, 0, Eigen::Vector3f(1, 2, 3), 0.5f);
+  const auto wrong = WritePtxFile(dir, "other.ptx", {other});
+  io::Project before = *reopened;
+  Expected<Scan> refused = RelinkScan(*reopened, "north", wrong, &(*scans)[1], progress, CancelToken());
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("not the same scan"), std::string::npos) << refused.error().message;
+  EXPECT_EQ(reopened->scans[1].path, before.scans[1].path);
+  const auto copy = WritePtxFile(dir, "copy_of_b.ptx", {PlaneScan("b", 2.0)});
+  Expected<Scan> relinked = RelinkScan(*reopened, "north", copy, &(*scans)[1], progress, CancelToken());
+  ASSERT_TRUE(relinked.ok()) << relinked.error().message;
+  EXPECT_EQ(relinked->name, "north");
+  EXPECT_EQ(reopened->scans[1].path, std::filesystem::absolute(copy).lexically_normal());
 }
 
 }  // namespace

@@ -345,28 +345,34 @@ class MergeProjectTest : public QObject {
     QVERIFY(QFile::exists(path));
     QVERIFY(!window.dirty());
 
+    // s01.ptx is already in the project: left out and listed; s03 is added.
     QVERIFY(window.AddScans({demo + "/s03.ptx", demo + "/s01.ptx"}));
     QVERIFY(WaitForJob(window, 120000));
     QStringList names;
     for (const auto& s : window.project().scans) names << QString::fromStdString(s.name);
-    QCOMPARE(names, QStringList({"s01", "s02", "s03", "s01_2"}));
-    QCOMPARE(QString::fromStdString(window.scans()[3].name), QString("s01_2"));
-    QCOMPARE(window.scans()[3].CountValid(), window.scans()[0].CountValid());
-    QCOMPARE(window.scanList()->rowCount(), 4);
+    QCOMPARE(names, QStringList({"s01", "s02", "s03"}));
+    QCOMPARE(QString::fromStdString(window.scans()[2].name), QString("s03"));
+    QVERIFY(window.scans()[2].CountValid() > 0);
+    QCOMPARE(window.scanList()->rowCount(), 3);
     QVERIFY(window.dirty());
+    auto* twice = window.findChild<QMessageBox*>("ErrorDialog");
+    QVERIFY(twice != nullptr);
+    QVERIFY2(twice->text().contains("s01.ptx") && twice->text().contains("already in the project"),
+             qPrintable(twice->text()));
+    twice->close();
 
-    // A bad file: a dialog naming it; the project keeps its four scans.
+    // A bad file: a dialog naming it; the project keeps its three scans.
     const QString bad = dir.filePath("bad.ptx");
     QFile f(bad);
     QVERIFY(f.open(QIODevice::WriteOnly));
     f.write("not a ptx\n");
     f.close();
     QVERIFY(window.AddScans({bad}));
-    QVERIFY(!WaitForJob(window, 120000));
+    QVERIFY(WaitForJob(window, 120000));
     auto* box = window.findChild<QMessageBox*>("ErrorDialog");
     QVERIFY(box != nullptr);
     QVERIFY2(box->text().contains("bad.ptx"), qPrintable(box->text()));
-    QCOMPARE(static_cast<int>(window.project().scans.size()), 4);
+    QCOMPARE(static_cast<int>(window.project().scans.size()), 3);
 
     // Unsaved changes: Cancel keeps them, Discard lets the next action go on.
     for (const auto& [button, expected] :
