@@ -4,17 +4,19 @@
 #include <QGraphicsEllipseItem>
 #include <QGraphicsLineItem>
 #include <QGraphicsSimpleTextItem>
+#include <QHelpEvent>
 #include <QMenu>
+#include <QToolTip>
+#include <algorithm>
 #include <cmath>
 
+#include "core/io/project_tree.h"
 #include "ui/scan_cloud_actors.h"
 
 namespace scanreg::ui {
 namespace {
 
-constexpr double kNodeRadius = 14.0;
-const char* kScanKey = "scan";
-const char* kParentKey = "parent";
+constexpr double kNodeRadius = 9.0;  // screen pixels at any zoom
 
 // Node positions in scene units: registered scans at their x/y (y up on screen), others on a circle.
 std::vector<QPointF> Layout(const io::Project& project) {
@@ -39,22 +41,27 @@ std::vector<QPointF> Layout(const io::Project& project) {
       pos[i] = QPointF((t.x() - min_x) * scale, -(t.y() - min_y) * scale);
     } else {
       const double a = 2 * M_PI * k++ / std::max(1, n);
-      pos[i] = QPointF(700 + 150 * std::cos(a), 150 * std::sin(a));
+      pos[i] = QPointF(750 + 150 * std::cos(a), 150 * std::sin(a));
     }
   }
   return pos;
 }
 
+double DistanceToSegment(QPointF p, QPointF a, QPointF b) {
+  const QPointF ab = b - a;
+  const double len2 = QPointF::dotProduct(ab, ab);
+  const double t = len2 > 0 ? std::clamp(QPointF::dotProduct(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  const QPointF q = a + t * ab - p;
+  return std::hypot(q.x(), q.y());
+}
+
 }  // namespace
 
-NetworkPanel::NetworkPanel(QWidget* parent) : QGraphicsView(parent) {
+NetworkPanel::NetworkPanel(QWidget* parent) : ZoomView(parent) {
   setObjectName("ScanNetwork");
   setScene(new QGraphicsScene(this));
-  setRenderHint(QPainter::Antialiasing);
+  setBackgroundBrush(palette().base());
   setMinimumSize(240, 200);
-  // The view fits the network on resize; scroll bars appearing and vanishing would re-fit it forever.
-  setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
-  setVerticalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
 }
 
 void NetworkPanel::Show(const io::Project& project) {
@@ -62,83 +69,173 @@ void NetworkPanel::Show(const io::Project& project) {
   QGraphicsScene* s = scene();
   s->clear();
   nodes_ = edges_ = 0;
-  const std::vector<QPointF> pos = Layout(project);
-  for (const io::LinkRecord& l : project.links) {
+  pos_ = Layout(project);
+  const std::vector<bool> on_hand = io::RestsOnHandPlacement(project);
+  for (std::size_t k = 0; k < project.links.size(); ++k) {
+    const io::LinkRecord& l = project.links[k];
     const int a = project.FindScan(l.parent), b = project.FindScan(l.child);
     if (a < 0 || b < 0) continue;
-    QPen pen(Qt::gray, 2, Qt::DashLine);
+    QPen pen(Qt::gray, 1.5, Qt::DashLine);
     if (!l.loop_check) {
-      if (l.status == io::LinkStatus::kOk) pen = QPen(QColor(40, 170, 70), 4);
-      if (l.status == io::LinkStatus::kWeak) pen = QPen(QColor(240, 150, 30), 4);
+      if (l.status == io::LinkStatus::kOk) pen = QPen(QColor(40, 170, 70), 3.5);
+      if (l.status == io::LinkStatus::kWeak) pen = QPen(QColor(240, 150, 30), 3.5);
       if (l.status == io::LinkStatus::kFailed) pen = QPen(QColor(200, 50, 40), 1.5, Qt::DashLine);
     }
     if (l.user_rejected) pen = QPen(QColor(120, 0, 0), 2, Qt::DotLine);
-    auto* line = s->addLine(QLineF(pos[a], pos[b]), pen);
+    pen.setCosmetic(true);  // the same width at any zoom
+    auto* line = s->addLine(QLineF(pos_[a], pos_[b]), pen);
     line->setZValue(l.status == io::LinkStatus::kFailed ? -2 : -1);
-    line->setData(0, kParentKey);
-    line->setData(1, QString::fromStdString(l.parent));
-    line->setData(2, QString::fromStdString(l.child));
-    QString tip = QString("%1 → %2: %3 (%4 matches, %5 consistent, RMS %6 mm, overlap %7 %)")
-                      .arg(QString::fromStdString(l.child), QString::fromStdString(l.parent),
-                           io::LinkStatusName(l.status))
-                      .arg(l.matches)
-                      .arg(l.consistent)
-                      .arg(l.rms_m * 1000, 0, 'f', 1)
-                      .arg(l.overlap * 100, 0, 'f', 1);
-    if (!l.reason.empty()) tip += "\n" + QString::fromStdString(l.reason);
-    line->setToolTip(tip);
+    line->setData(0, static_cast<int>(k));
     ++edges_;
   }
   for (int i = 0; i < static_cast<int>(project.scans.size()); ++i) {
     const io::ProjectScan& scan = project.scans[i];
     double rgb[3];
     ScanColour(i, rgb);
-    auto* node = s->addEllipse(pos[i].x() - kNodeRadius, pos[i].y() - kNodeRadius, 2 * kNodeRadius, 2 * kNodeRadius,
-                               QPen(scan.registered ? Qt::black : QColor(200, 50, 40), scan.registered ? 1.5 : 3),
+    QPen outline(scan.registered ? QColor(30, 30, 30) : QColor(200, 50, 40), scan.registered ? 1.5 : 3);
+    if (on_hand[i]) outline = QPen(QColor(230, 120, 0), 3, Qt::DashLine);  // rests on a hand placement
+    outline.setCosmetic(true);
+    auto* node = s->addEllipse(-kNodeRadius, -kNodeRadius, 2 * kNodeRadius, 2 * kNodeRadius, outline,
                                QBrush(QColor::fromRgbF(rgb[0], rgb[1], rgb[2])));
-    node->setData(0, kScanKey);
-    node->setData(1, QString::fromStdString(scan.name));
-    QString tip = QString::fromStdString(scan.name) + (scan.registered ? "" : " (unregistered)");
-    if (scan.parent_override) tip += "\nparent set by hand: " + QString::fromStdString(*scan.parent_override);
-    node->setToolTip(tip);
-    auto* label = s->addSimpleText(QString::fromStdString(scan.name) + (scan.parent_override ? " ✎" : ""));
-    label->setPos(pos[i] + QPointF(kNodeRadius, -2 * kNodeRadius));
+    node->setFlag(QGraphicsItem::ItemIgnoresTransformations);
+    node->setPos(pos_[i]);
+    QString text = QString::fromStdString(scan.name);
+    if (project.root == scan.name) text += tr(" (root)");
+    if (on_hand[i]) text += tr(" (hand)");
+    if (scan.parent_override) text += " ✎";
+    auto* label = s->addSimpleText(text);
+    label->setFlag(QGraphicsItem::ItemIgnoresTransformations);
+    label->setPos(pos_[i]);
+    label->setTransform(QTransform::fromTranslate(kNodeRadius + 2, -kNodeRadius - 14));
+    label->setBrush(palette().text());
     ++nodes_;
   }
-  fitInView(s->itemsBoundingRect().adjusted(-40, -40, 40, 40), Qt::KeepAspectRatio);
+  Fit();
 }
 
-void NetworkPanel::resizeEvent(QResizeEvent* event) {
-  QGraphicsView::resizeEvent(event);
-  if (scene()) fitInView(scene()->itemsBoundingRect().adjusted(-40, -40, 40, 40), Qt::KeepAspectRatio);
+QString NetworkPanel::ScanAt(QPoint view_pos) const {
+  double best = kNodeRadius + 4;
+  QString out;
+  for (std::size_t i = 0; i < pos_.size() && i < project_.scans.size(); ++i) {
+    const QPointF d = QPointF(mapFromScene(pos_[i])) - QPointF(view_pos);
+    const double r = std::hypot(d.x(), d.y());
+    if (r <= best) best = r, out = QString::fromStdString(project_.scans[i].name);
+  }
+  return out;
+}
+
+std::vector<int> NetworkPanel::LinksNear(QPoint view_pos, double tolerance_px) const {
+  std::vector<std::pair<double, int>> near;
+  for (std::size_t k = 0; k < project_.links.size(); ++k) {
+    const int a = project_.FindScan(project_.links[k].parent), b = project_.FindScan(project_.links[k].child);
+    if (a < 0 || b < 0 || a >= static_cast<int>(pos_.size()) || b >= static_cast<int>(pos_.size())) continue;
+    const double d = DistanceToSegment(QPointF(view_pos), QPointF(mapFromScene(pos_[a])), QPointF(mapFromScene(pos_[b])));
+    if (d <= tolerance_px) near.emplace_back(d, static_cast<int>(k));
+  }
+  std::sort(near.begin(), near.end());
+  std::vector<int> out;
+  for (const auto& [d, k] : near) out.push_back(k);
+  return out;
+}
+
+QString NetworkPanel::LinkToolTip(int k) const {
+  const io::LinkRecord& l = project_.links[k];
+  const QString kind = l.loop_check ? tr("loop check") : io::IsTreeLink(l) ? tr("link") : tr("attempt");
+  QString tip = tr("%1 → %2 (%3): %4 — %5")
+                    .arg(QString::fromStdString(l.child), QString::fromStdString(l.parent), kind,
+                         io::LinkStatusName(l.status), QString::fromStdString(l.method));
+  const bool measured = l.status != io::LinkStatus::kFailed || l.rms_m > 0.0 || l.overlap > 0.0;
+  tip += tr("\n%1 matches (%2 geometric), %3 inliers, %4 consistent").arg(l.matches).arg(l.geometric_matches)
+             .arg(l.ransac_inliers).arg(l.consistent);
+  if (measured)
+    tip += tr("\nRMS %1 mm, overlap %2 %, conflicts %3 %").arg(l.rms_m * 1000, 0, 'f', 1)
+               .arg(l.overlap * 100, 0, 'f', 1).arg(l.conflict * 100, 0, 'f', 1);
+  if (!l.picked.empty()) tip += tr("\nfrom %n picked point pair(s)", "", int(l.picked.size()));
+  if (l.user_accepted) tip += tr("\naccepted by the user: kept by later registrations");
+  if (l.user_rejected) tip += tr("\nrejected by the user");
+  if (!l.reason.empty()) tip += "\n" + QString::fromStdString(l.reason);
+  return tip;
+}
+
+QString NetworkPanel::ScanToolTip(const QString& name) const {
+  const int i = project_.FindScan(name.toStdString());
+  if (i < 0) return QString();
+  const io::ProjectScan& s = project_.scans[i];
+  QString tip = name + ": " + io::PoseStateName(io::ScanPoseState(s));
+  if (io::RestsOnHandPlacement(project_)[i]) tip += tr("\nits pose rests on a hand placement");
+  if (s.parent_override) tip += tr("\nparent set by hand: %1").arg(QString::fromStdString(*s.parent_override));
+  if (!s.registered && !s.unregistered_reason.empty()) tip += "\n" + QString::fromStdString(s.unregistered_reason);
+  return tip;
+}
+
+bool NetworkPanel::viewportEvent(QEvent* event) {
+  if (event->type() == QEvent::ToolTip) {
+    const auto* help = static_cast<QHelpEvent*>(event);
+    QString tip = ScanToolTip(ScanAt(help->pos()));
+    if (tip.isEmpty()) {
+      const std::vector<int> links = LinksNear(help->pos());
+      if (!links.empty()) tip = LinkToolTip(links.front());
+      if (links.size() > 1) tip += tr("\n(%1 more link(s) here: right-click lists them)").arg(links.size() - 1);
+    }
+    if (tip.isEmpty()) QToolTip::hideText();
+    else QToolTip::showText(help->globalPos(), tip, this);
+    return true;
+  }
+  return ZoomView::viewportEvent(event);
+}
+
+void NetworkPanel::AddLinkActions(QMenu* menu, int k) {
+  const QString parent = QString::fromStdString(project_.links[k].parent);
+  const QString child = QString::fromStdString(project_.links[k].child);
+  menu->addAction(tr("Accept link %1 → %2").arg(child, parent), this,
+                  [this, parent, child] { emit LinkDecisionRequested(parent, child, true, false); });
+  menu->addAction(tr("Reject link %1 → %2").arg(child, parent), this,
+                  [this, parent, child] { emit LinkDecisionRequested(parent, child, false, true); });
+  menu->addAction(tr("Clear decision"), this,
+                  [this, parent, child] { emit LinkDecisionRequested(parent, child, false, false); });
 }
 
 void NetworkPanel::contextMenuEvent(QContextMenuEvent* event) {
-  QGraphicsItem* item = itemAt(event->pos());
-  if (!item) return;
   QMenu menu(this);
-  if (item->data(0).toString() == kScanKey) {
-    const QString child = item->data(1).toString();
+  const QString child = ScanAt(event->pos());
+  if (!child.isEmpty()) {
+    const int c = project_.FindScan(child.toStdString());
+    std::string current;
+    for (const io::LinkRecord& l : project_.links)
+      if (io::IsTreeLink(l) && l.child == child.toStdString()) current = l.parent;
+    // Candidates by matches with the child (the last registration's confusion matrix), most first.
+    const Eigen::MatrixXi* confusion = project_.CurrentConfusion();
+    std::vector<std::pair<int, int>> candidates;  // (-matches, scan)
+    for (int p = 0; p < static_cast<int>(project_.scans.size()); ++p)
+      if (p != c) candidates.emplace_back(confusion ? -std::max((*confusion)(p, c), (*confusion)(c, p)) : 0, p);
+    std::stable_sort(candidates.begin(), candidates.end());
     QMenu* parent_menu = menu.addMenu(tr("Register %1 to").arg(child));
-    for (const io::ProjectScan& s : project_.scans) {
+    for (const auto& [neg, p] : candidates) {
+      const io::ProjectScan& s = project_.scans[p];
+      QString text = QString::fromStdString(s.name);
+      if (confusion) text += tr("  (%n match(es))", "", -neg);
+      if (s.name == current) text += tr("  — current parent");
+      if (!s.registered) text += tr("  — not registered");
       const QString name = QString::fromStdString(s.name);
-      if (name == child) continue;
-      parent_menu->addAction(name, this, [this, child, name] { emit ParentOverrideRequested(child, name); });
+      parent_menu->addAction(text, this, [this, child, name] { emit ParentOverrideRequested(child, name); });
     }
-    const int index = project_.FindScan(child.toStdString());
     QAction* clear = menu.addAction(tr("Clear parent override"), this,
                                     [this, child] { emit ParentOverrideRequested(child, QString()); });
-    clear->setEnabled(index >= 0 && project_.scans[index].parent_override.has_value());
-  } else if (item->data(0).toString() == kParentKey) {
-    const QString parent = item->data(1).toString(), child = item->data(2).toString();
-    menu.addAction(tr("Accept link %1 → %2").arg(child, parent), this,
-                   [this, parent, child] { emit LinkDecisionRequested(parent, child, true, false); });
-    menu.addAction(tr("Reject link %1 → %2").arg(child, parent), this,
-                   [this, parent, child] { emit LinkDecisionRequested(parent, child, false, true); });
-    menu.addAction(tr("Clear decision"), this,
-                   [this, parent, child] { emit LinkDecisionRequested(parent, child, false, false); });
+    clear->setEnabled(project_.scans[c].parent_override.has_value());
   } else {
-    return;
+    const std::vector<int> links = LinksNear(event->pos());
+    if (links.empty()) return;
+    if (links.size() == 1) {
+      AddLinkActions(&menu, links.front());
+    } else {  // several links run close together here: one submenu each
+      for (int k : links) {
+        const io::LinkRecord& l = project_.links[k];
+        QMenu* sub = menu.addMenu(QString("%1 → %2 (%3%4)")
+                                      .arg(QString::fromStdString(l.child), QString::fromStdString(l.parent),
+                                           io::LinkStatusName(l.status), l.loop_check ? tr(", loop check") : ""));
+        AddLinkActions(sub, k);
+      }
+    }
   }
   menu.exec(event->globalPos());
 }

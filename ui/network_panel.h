@@ -1,18 +1,25 @@
 // The scan network: scans as nodes (top view at their registered positions, on a circle while
 // unregistered), links as edges coloured by status (ok green, weak orange, failed red dashed,
-// loop checks grey dashed) with their match counts. Right-click a scan to set or clear its
-// parent; right-click a link to accept or reject it.
+// loop checks grey dashed). The wheel zooms, a drag pans, a double-click on empty space fits;
+// labels and nodes keep their screen size at any zoom. Links are picked within a few pixels; where
+// several run close together the context menu lists each. Tooltips give a link's evidence and a
+// scan's state. Right-click a scan to register it to another (its current parent and the match
+// counts shown) or clear its parent; right-click a link to accept or reject it.
 #pragma once
 
-#include <QGraphicsView>
+#include <QString>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/io/project.h"
+#include "ui/zoom_view.h"
+
+class QMenu;
 
 namespace scanreg::ui {
 
-class NetworkPanel : public QGraphicsView {
+class NetworkPanel : public ZoomView {
   Q_OBJECT
 
  public:
@@ -21,6 +28,14 @@ class NetworkPanel : public QGraphicsView {
   int NodeCount() const { return nodes_; }
   int EdgeCount() const { return edges_; }
 
+  // What is under a point of the view: the scan whose node is within a few pixels (empty: none), and
+  // the links passing within tolerance_px, nearest first (indices into the project's links).
+  QString ScanAt(QPoint view_pos) const;
+  std::vector<int> LinksNear(QPoint view_pos, double tolerance_px = 6.0) const;
+  const io::Project& project() const { return project_; }
+  QString LinkToolTip(int link) const;
+  QString ScanToolTip(const QString& scan) const;
+
  signals:
   // parent empty: clear the override.
   void ParentOverrideRequested(const QString& child, const QString& parent);
@@ -28,10 +43,12 @@ class NetworkPanel : public QGraphicsView {
 
  protected:
   void contextMenuEvent(QContextMenuEvent* event) override;
-  void resizeEvent(QResizeEvent* event) override;
+  bool viewportEvent(QEvent* event) override;
 
  private:
+  void AddLinkActions(QMenu* menu, int link);
   io::Project project_;
+  std::vector<QPointF> pos_;  // node positions, scene units
   int nodes_ = 0;
   int edges_ = 0;
 };

@@ -11,6 +11,7 @@
 
 #include "core/features/feature_cache.h"
 #include "core/features/panorama.h"
+#include "core/io/project_tree.h"
 #include "ui/distance_overlay.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
@@ -49,8 +50,8 @@ std::optional<std::pair<CoarseMethod, pipeline::FineMethod>> LinkMethods(const i
   return std::nullopt;
 }
 
-// Clicks on the scan network: a scan shows its panorama, a link opens its pair. Reads the
-// network's item data (0: "scan" with 1: name, or "parent" with 1: parent, 2: child).
+// Double-clicks on the scan network: a scan shows its panorama, a link (the nearest within a few
+// pixels) opens its pair; elsewhere the view fits the network.
 class NetworkClicks : public QObject {
  public:
   NetworkClicks(NetworkPanel* network, PairInspector* inspector)
@@ -59,13 +60,13 @@ class NetworkClicks : public QObject {
  protected:
   bool eventFilter(QObject*, QEvent* event) override {
     if (event->type() != QEvent::MouseButtonDblClick) return false;
-    const auto* mouse = static_cast<QMouseEvent*>(event);
-    const QGraphicsItem* item = network_->itemAt(mouse->pos());
-    if (!item) return false;
-    if (item->data(0).toString() == "scan") return inspector_->ShowScan(item->data(1).toString());
-    if (item->data(0).toString() == "parent")
-      return inspector_->OpenPair(item->data(1).toString(), item->data(2).toString());
-    return false;
+    const QPoint at = static_cast<QMouseEvent*>(event)->pos();
+    const QString scan = network_->ScanAt(at);
+    if (!scan.isEmpty()) return inspector_->ShowScan(scan);
+    const std::vector<int> links = network_->LinksNear(at);
+    if (links.empty()) return false;
+    const io::LinkRecord& l = network_->project().links[links.front()];
+    return inspector_->OpenPair(QString::fromStdString(l.parent), QString::fromStdString(l.child));
   }
 
  private:
@@ -210,7 +211,25 @@ bool PairInspector::OpenPair(const QString& parent, const QString& child) {
   panel_->SetPair(parent, child);
   if (const auto methods = LinkMethods(project, parent.toStdString(), child.toStdString()))
     panel_->SetMethods(methods->first, methods->second);
-  return RunPair();
+  // The evidence the project stores for the pair, shown as it is: Run registers it again (issue 14).
+  const io::LinkRecord* stored = nullptr;
+  for (const io::LinkRecord& l : project.links) {
+    if (l.parent != parent.toStdString() || l.child != child.toStdString()) continue;
+    if (!stored || io::IsTreeLink(l) || (stored->status == io::LinkStatus::kFailed && l.loop_check)) stored = &l;
+  }
+  if (stored) {
+    const QString role = io::IsTreeLink(*stored) ? tr("the scan's link") : stored->loop_check ? tr("a loop check")
+                                                                                             : tr("a failed attempt");
+    panel_->ShowStoredLink(*stored, tr("stored: %1 of the last registration (Run registers the pair again)").arg(role));
+  } else {
+    panel_->ShowMessage(tr("not linked"), tr("the registration did not try this pair; Run registers it"));
+  }
+  const QString shown = child + " → " + parent;
+  if (panoramas_.count(parent) && panoramas_.count(child))
+    panorama_->ShowPair(panoramas_.at(parent), panoramas_.at(child), {}, {});
+  else
+    panorama_->ShowMessage(tr("%1: Run shows the matches of the two panoramas").arg(shown));
+  return true;
 }
 
 bool PairInspector::RunPair() {

@@ -158,8 +158,7 @@ void PairPanel::ShowMessage(const QString& status, const QString& reason) {
   use_->setEnabled(false);
 }
 
-void PairPanel::ShowResult(const pipeline::PairInspection& result) {
-  const io::LinkRecord& l = result.result.link;
+void PairPanel::ShowLinkFields(const io::LinkRecord& l) {
   const QColor colour = l.status == io::LinkStatus::kOk     ? QColor(20, 140, 60)
                         : l.status == io::LinkStatus::kWeak ? QColor(200, 120, 0)
                                                             : QColor(190, 40, 30);
@@ -179,10 +178,22 @@ void PairPanel::ShowResult(const pipeline::PairInspection& result) {
   SetField("moving", measured ? Percent(l.moving) : none);
   SetField("iterations", measured ? QString::number(l.iterations) : none);
   SetField("time", QString("%1 s").arg(l.seconds, 0, 'f', 2));
+}
+
+void PairPanel::ShowResult(const pipeline::PairInspection& result) {
+  const io::LinkRecord& l = result.result.link;
+  ShowLinkFields(l);
   SetField("error", result.reference_error ? ErrorText(*result.reference_error) : tr("no reference poses"));
   SetField("coarse_error",
            result.coarse_reference_error ? ErrorText(*result.coarse_reference_error) : tr("no reference poses"));
   use_->setEnabled(l.status != io::LinkStatus::kFailed);
+}
+
+void PairPanel::ShowStoredLink(const io::LinkRecord& link, const QString& note) {
+  ShowLinkFields(link);
+  SetField("error", note);
+  SetField("coarse_error", QStringLiteral("—"));
+  use_->setEnabled(false);  // already the project's
 }
 
 }  // namespace scanreg::ui

@@ -36,6 +36,9 @@ class PairPanel : public QWidget {
   void SetRunning(bool running);
   void ShowResult(const pipeline::PairInspection& result);
   void ShowMessage(const QString& status, const QString& reason);  // clears the evidence
+  // A link as the project stores it (no run): its evidence, and `note` where the errors against the
+  // reference go (a stored link says where it came from; Run registers the pair again).
+  void ShowStoredLink(const io::LinkRecord& link, const QString& note);
   // The text of an evidence field: "status", "reason", "method", "matches", "reliable", "inliers",
   // "consistent", "rms", "overlap", "conflict", "iterations", "time", "error", "coarse_error".
   QString Evidence(const QString& field) const;
@@ -52,6 +55,7 @@ class PairPanel : public QWidget {
 
  private:
   void SetField(const QString& field, const QString& text);
+  void ShowLinkFields(const io::LinkRecord& link);
 
   QComboBox* parent_ = nullptr;
   QComboBox* child_ = nullptr;

@@ -10,6 +10,7 @@
 #include "ui/main_window.h"
 #include "ui/merge_panel.h"
 #include "ui/pair_inspector.h"
+#include "ui/pick_points_dialog.h"
 #include "ui/register_settings_dialog.h"
 #include "ui/scan_scene.h"
 #include "ui/view_3d.h"
@@ -71,12 +72,25 @@ std::vector<ScreenshotView> ScreenshotViews() {
          dialog->close();
          return image;
        }},
+      {"pick_points.png", "",
+       [](MainWindow& w) {
+         const std::vector<io::ProjectScan>& scans = w.project().scans;
+         if (scans.size() >= 2) w.PickPoints(QString::fromStdString(scans.back().name));
+       },
+       [](MainWindow& w) {
+         auto* dialog = w.findChild<PickPointsDialog*>();
+         if (!dialog) return QImage();
+         const QImage image = dialog->grab().toImage();
+         dialog->close();
+         return image;
+       }},
       // The pair view replaces the 3D view's scene: keep it last.
       {"pair_view.png", "",
        [](MainWindow& w) {
          const std::vector<io::ProjectScan>& scans = w.project().scans;
-         if (scans.size() >= 3)
-           w.pairInspector()->OpenPair(QString::fromStdString(scans[1].name), QString::fromStdString(scans[2].name));
+         if (scans.size() >= 3 &&
+             w.pairInspector()->OpenPair(QString::fromStdString(scans[1].name), QString::fromStdString(scans[2].name)))
+           w.pairInspector()->RunPair();
        },
        [](MainWindow& w) { return w.Screenshot(); }},
   };

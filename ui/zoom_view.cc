@@ -3,6 +3,7 @@
 #include <QGraphicsScene>
 #include <QMouseEvent>
 #include <QWheelEvent>
+#include <algorithm>
 
 namespace scanreg::ui {
 
@@ -18,7 +19,17 @@ ZoomView::ZoomView(QWidget* parent) : QGraphicsView(parent) {
 }
 
 void ZoomView::Fit() {
-  if (scene() && !scene()->items().isEmpty()) fitInView(scene()->itemsBoundingRect(), Qt::KeepAspectRatio);
+  if (!scene() || scene()->items().isEmpty()) return;
+  const QRectF items = scene()->itemsBoundingRect();
+  // The scene's own rect only grows (a previous content would stay in it): pan over the items and as
+  // much again around them.
+  setSceneRect(items.adjusted(-items.width(), -items.height(), items.width(), items.height()));
+  fitInView(items, Qt::KeepAspectRatio);
+  // A margin of 30 pixels: items drawn at screen size (nodes, labels) stay inside.
+  const QSize v = viewport()->size();
+  const double f = std::min(1.0 - 60.0 / std::max(120, v.width()), 1.0 - 60.0 / std::max(120, v.height()));
+  scale(f, f);
+  centerOn(items.center());
 }
 
 void ZoomView::wheelEvent(QWheelEvent* event) {

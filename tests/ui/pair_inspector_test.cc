@@ -11,6 +11,8 @@
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QUndoStack>
+#include <QGraphicsSimpleTextItem>
+#include <QGraphicsLineItem>
 #include <QtTest/QtTest>
 #include <cmath>
 
@@ -121,6 +123,14 @@ class PairInspectorTest : public QObject {
     const int row = RowOf(confusion, child, true), col = RowOf(confusion, parent, false);
     QVERIFY(row >= 0 && col >= 0);
     ClickCell(confusion, row, col);
+    // The stored evidence first, without a run (issue 14); Run registers the pair again.
+    scanreg::ui::PairPanel* stored = window_->pairInspector()->pairPanel();
+    QVERIFY(!window_->jobs()->busy());
+    QCOMPARE(stored->Evidence("matches"), QString::number(link_.matches));
+    QCOMPARE(stored->Evidence("inliers"), QString::number(link_.ransac_inliers));
+    QVERIFY2(stored->Evidence("error").contains("stored"), qPrintable(stored->Evidence("error")));
+    QVERIFY(!stored->useButton()->isEnabled());
+    QTest::mouseClick(stored->runButton(), Qt::LeftButton);
     QVERIFY(WaitForJob(*window_, 120000));
     scanreg::ui::PanoramaView* view = window_->pairInspector()->panoramaView();
     QCOMPARE(view->ShownScan(), child + " → " + parent);
@@ -245,21 +255,43 @@ class PairInspectorTest : public QObject {
     const QString parent = QString::fromStdString(link_.parent), child = QString::fromStdString(link_.child);
     QGraphicsLineItem* edge = nullptr;
     for (QGraphicsItem* item : network->scene()->items()) {
-      if (item->data(1).toString() == parent && item->data(2).toString() == child)
-        edge = dynamic_cast<QGraphicsLineItem*>(item);
+      auto* line = dynamic_cast<QGraphicsLineItem*>(item);
+      if (!line) continue;
+      const auto& l = window_->project().links[line->data(0).toInt()];
+      if (l.parent == link_.parent && l.child == link_.child && !l.loop_check) edge = line;
     }
     QVERIFY(edge != nullptr);
     scanreg::ui::PairPanel* panel = window_->pairInspector()->pairPanel();
     panel->SetPair(child, parent);  // the other way round: the click must set it
-    const QPoint at = network->mapFromScene(edge->mapToScene(edge->line().center()));
+    // 4 pixels beside the line still picks it (tolerant picking), at any zoom.
+    network->scale(1.6, 1.6);
+    network->centerOn(edge->line().center());
+    const QPointF centre = network->mapFromScene(edge->line().center());
+    const QLineF on_screen(network->mapFromScene(edge->line().p1()), network->mapFromScene(edge->line().p2()));
+    const QPointF normal = QPointF(-on_screen.dy(), on_screen.dx()) / on_screen.length();
+    const QPoint at = (centre + 4.0 * normal).toPoint();
+    const std::vector<int> near = network->LinksNear(at);
+    QVERIFY(!near.empty());
+    QVERIFY(network->LinksNear(at, 1.0).empty() || network->LinksNear(at, 1.0) != near);
     QTest::mouseDClick(network->viewport(), Qt::LeftButton, {}, at);
-    QVERIFY(window_->jobs()->busy());
-    QCOMPARE(panel->parentScan(), parent);
-    QCOMPARE(panel->childScan(), child);
-    QTest::mouseClick(panel->cancelButton(), Qt::LeftButton);
-    bool cancelled = false;
-    QVERIFY(!WaitForJob(*window_, 120000, &cancelled));
-    QVERIFY(cancelled);
+    QVERIFY(!window_->jobs()->busy());  // the stored evidence is shown; nothing runs
+    QCOMPARE(panel->parentScan(), QString::fromStdString(window_->project().links[near.front()].parent));
+    QCOMPARE(panel->childScan(), QString::fromStdString(window_->project().links[near.front()].child));
+    const QString tip = network->LinkToolTip(near.front());
+    QVERIFY2(tip.contains("matches") && tip.contains("RMS"), qPrintable(tip));
+    // Labels keep their screen size when zoomed: readable at any size.
+    QGraphicsSimpleTextItem* label = nullptr;
+    for (QGraphicsItem* item : network->scene()->items())
+      if (auto* t = dynamic_cast<QGraphicsSimpleTextItem*>(item)) label = t;
+    QVERIFY(label != nullptr);
+    auto on_screen_height = [&] {
+      return label->deviceTransform(network->viewportTransform()).mapRect(label->boundingRect()).height();
+    };
+    const double before = on_screen_height();
+    network->scale(3, 3);
+    QVERIFY(before > 8);
+    QCOMPARE(on_screen_height(), before);
+    network->Fit();
   }
 
   void APairRunRequestedDuringAnotherJobStartsAfterIt() {
