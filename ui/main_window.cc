@@ -489,13 +489,16 @@ bool MainWindow::StartPairJob(const QString& title,
   });
 }
 
-bool MainWindow::RefineScan(const QString& scan) {
-  const QStringList parents = ParentCandidates(project(), scan.toStdString());
+bool MainWindow::RefineScan(const QString& scan, const QString& parent) {
+  QStringList parents = ParentCandidates(project(), scan.toStdString());
+  if (!parent.isEmpty()) parents = parents.contains(parent) ? QStringList{parent} : QStringList{};
   const int c = project().FindScan(scan.toStdString());
   if (c < 0 || parents.isEmpty() || project().root == scan.toStdString()) {
     ShowError(tr("Refine scan"), c < 0 ? tr("Select a scan in the scan list first.")
                                  : project().root == scan.toStdString()
                                      ? tr("%1 is the root: the other scans are refined to it.").arg(scan)
+                                 : !parent.isEmpty()
+                                     ? tr("%1 is not registered: refine %2 against a registered scan.").arg(parent, scan)
                                      : tr("No registered scan to refine %1 against: register or place one first.").arg(scan));
     return false;
   }

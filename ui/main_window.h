@@ -103,10 +103,10 @@ class MainWindow : public QMainWindow {
   // Registration → Refine all from current poses: one run of --coarse none (the saved settings are
   // not changed).
   bool RefineFromCurrentPoses();
-  // Registration → Refine scan from its pose: the scan refined against its tree parent (or the
-  // nearest registered scan) from where it stands; the result becomes its link (undoable), or a
-  // dialog says why it failed.
-  bool RefineScan(const QString& scan);
+  // Registration → Refine scan from its pose (and the pair panel's Refine from current poses): the
+  // scan refined against `parent` (default: its tree parent, else the nearest registered scan) from
+  // where both stand; the result becomes its link (undoable), or a dialog says why it failed.
+  bool RefineScan(const QString& scan, const QString& parent = QString());
   // Registration → Align by picked points…: the dialog for `child` (window-modal, does not block;
   // null with a dialog when no registered scan can be its parent). Accepting it starts
   // AlignFromPickedPoints.

@@ -136,6 +136,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   options.remove_small_pieces = settings.value("merge/remove_small_pieces", defaults.remove_small_pieces).toBool();
   options.remove_moving = settings.value("merge/remove_moving", defaults.remove_moving).toBool();
   SetOptions(options.Validate() ? options : defaults);
+  voxel_chosen_ = false;  // remembered from another project: sized to the next one
 
   connect(run_, &QPushButton::clicked, this, &MergePanel::Run);
   connect(export_, &QPushButton::clicked, this, &MergePanel::ChooseExportFile);
@@ -147,7 +148,11 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(estimate_timer_, &QTimer::timeout, this, &MergePanel::UpdateEstimate);
   auto later = [this] { estimate_timer_->start(); };
   connect(method_, qOverload<int>(&QComboBox::currentIndexChanged), this, later);
-  connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
+  connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, [this, later] {
+    if (!sizing_) voxel_chosen_ = true;
+    later();
+  });
+  connect(window_->document(), &ProjectDocument::Opened, this, [this] { voxel_chosen_ = false; });
   connect(max_range_m_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
   connect(keep_moving_, &QCheckBox::toggled, this, later);
   connect(window_->document(), &ProjectDocument::Changed, this, later);
@@ -164,11 +169,20 @@ void MergePanel::UpdateEstimate() {
   std::vector<const Scan*> scans;
   for (std::size_t i = 0; i < window_->scans().size() && i < window_->project().scans.size(); ++i)
     if (window_->project().scans[i].registered) scans.push_back(&window_->scans()[i]);
-  const merge::MergeOptions options = Options();
+  merge::MergeOptions options = Options();
   merge::MergeEstimate estimate;
   if (scans.empty() || !options.Validate()) {
     estimate_->clear();
     return;
+  }
+  if (!voxel_chosen_) {  // a default that finishes in about a minute on this project
+    merge::MergeOptions base = options;
+    base.voxel_m = merge::MergeOptions().voxel_m;
+    options = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr);
+    sizing_ = true;
+    voxel_mm_->setValue(options.voxel_m * 1000.0);
+    sizing_ = false;
+    options = Options();
   }
   if (Status fits = merge::CheckMergeFits(scans, options, &estimate); !fits) {
     estimate_->setText(QString::fromStdString(fits.error().message));
@@ -177,7 +191,8 @@ void MergePanel::UpdateEstimate() {
   }
   estimate_->setStyleSheet(QString());
   estimate_->setText(tr("Estimate for %n scan(s): ", "", int(scans.size())) +
-                     QString::fromStdString(estimate.Describe()));
+                     QString::fromStdString(estimate.Describe()) +
+                     (voxel_chosen_ ? QString() : tr(" — voxel sized for this project (set it to choose your own)")));
 }
 
 merge::MergeOptions MergePanel::Options() const {

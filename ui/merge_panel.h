@@ -31,6 +31,7 @@ class MergePanel : public QWidget {
   MergePanel(MainWindow* window, ScanScene* scene);
 
   merge::MergeOptions Options() const;
+  // The user's choice (the voxel is no longer sized to the project).
   void SetOptions(const merge::MergeOptions& options);
 
   // Starts the merge of the registered scans; false when a job runs or nothing can be merged
@@ -67,6 +68,10 @@ class MergePanel : public QWidget {
   QLabel* summary_ = nullptr;
   QLabel* estimate_ = nullptr;
   QTimer* estimate_timer_ = nullptr;
+  // The voxel is sized to the project (pipeline::SizedMergeOptions) until the user chooses one; a
+  // new project is sized again.
+  bool voxel_chosen_ = false;
+  bool sizing_ = false;  // the panel itself is setting the voxel
 };
 
 }  // namespace scanreg::ui

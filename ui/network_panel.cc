@@ -8,6 +8,7 @@
 #include <QMenu>
 #include <QToolTip>
 #include <algorithm>
+#include <map>
 #include <cmath>
 
 #include "core/io/project_tree.h"
@@ -34,11 +35,23 @@ std::vector<QPointF> Layout(const io::Project& project) {
   const double extent = std::max({max_x - min_x, max_y - min_y, 1e-6});
   const double scale = registered >= 2 ? 600.0 / extent : 1.0;
   int k = 0;
+  // Clusters (scans registered to each other, not to the root) to the right, in their own frame.
+  double cluster_x = 750;
+  std::map<std::string, QPointF> cluster_origin;
   for (int i = 0; i < n; ++i) {
     const io::ProjectScan& s = project.scans[i];
     if (s.registered && registered >= 2) {
       const Eigen::Vector3d t = s.world_from_scan.translation();
       pos[i] = QPointF((t.x() - min_x) * scale, -(t.y() - min_y) * scale);
+    } else if (!s.registered && !s.cluster.empty() && project.FindScan(s.cluster) >= 0) {
+      const Eigen::Vector3d root = project.scans[project.FindScan(s.cluster)].world_from_scan.translation();
+      if (!cluster_origin.count(s.cluster)) {
+        cluster_origin[s.cluster] = QPointF(cluster_x, 300);
+        cluster_x += 300;
+      }
+      const Eigen::Vector3d t = s.world_from_scan.translation() - root;
+      const double cs = registered >= 2 ? scale : 20.0;
+      pos[i] = cluster_origin[s.cluster] + QPointF(t.x() * cs, -t.y() * cs);
     } else {
       const double a = 2 * M_PI * k++ / std::max(1, n);
       pos[i] = QPointF(750 + 150 * std::cos(a), 150 * std::sin(a));
@@ -102,6 +115,7 @@ void NetworkPanel::Show(const io::Project& project) {
     QString text = QString::fromStdString(scan.name);
     if (project.root == scan.name) text += tr(" (root)");
     if (on_hand[i]) text += tr(" (hand)");
+    if (!scan.registered && !scan.cluster.empty()) text += tr(" [cluster %1]").arg(QString::fromStdString(scan.cluster));
     if (scan.parent_override) text += " ✎";
     auto* label = s->addSimpleText(text);
     label->setFlag(QGraphicsItem::ItemIgnoresTransformations);
@@ -164,6 +178,9 @@ QString NetworkPanel::ScanToolTip(const QString& name) const {
   QString tip = name + ": " + io::PoseStateName(io::ScanPoseState(s));
   if (io::RestsOnHandPlacement(project_)[i]) tip += tr("\nits pose rests on a hand placement");
   if (s.parent_override) tip += tr("\nparent set by hand: %1").arg(QString::fromStdString(*s.parent_override));
+  if (!s.registered && !s.cluster.empty())
+    tip += tr("\nin the cluster of %1: registered to its scans, not to the root; one link places the cluster")
+               .arg(QString::fromStdString(s.cluster));
   if (!s.registered && !s.unregistered_reason.empty()) tip += "\n" + QString::fromStdString(s.unregistered_reason);
   return tip;
 }

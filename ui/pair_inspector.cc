@@ -131,6 +131,8 @@ PairInspector::PairInspector(MainWindow* window) : QObject(window), window_(wind
   connect(panel_, &PairPanel::RunRequested, this, &PairInspector::RunPair);
   connect(panel_, &PairPanel::CancelRequested, this, &PairInspector::CancelPair);
   connect(panel_, &PairPanel::UseResultRequested, this, &PairInspector::UseResult);
+  connect(panel_, &PairPanel::RefineRequested, this,
+          [this] { window_->RefineScan(panel_->childScan(), panel_->parentScan()); });
   connect(panel_, &PairPanel::ShowProjectRequested, window, &MainWindow::Refresh);
 }
 

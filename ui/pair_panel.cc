@@ -50,6 +50,11 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
   use_ = new QPushButton(tr("Use this result"), this);
   use_->setObjectName("PairUse");
   use_->setToolTip(tr("Make this the child's link and move it (and the scans registered through it); undoable"));
+  refine_ = new QPushButton(tr("Refine from current poses"), this);
+  refine_->setObjectName("PairRefine");
+  refine_->setToolTip(tr("Refine the child against the parent from where both stand now, with the fine step only "
+                         "(no features); the result becomes the child's link (undoable)"));
+  connect(refine_, &QPushButton::clicked, this, &PairPanel::RefineRequested);
   show_project_ = new QPushButton(tr("Show project"), this);
   show_project_->setToolTip(tr("Show all registered scans in the 3D view again"));
   connect(run_, &QPushButton::clicked, this, &PairPanel::RunRequested);
@@ -62,6 +67,8 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
   auto* buttons2 = new QHBoxLayout;
   buttons2->addWidget(use_);
   buttons2->addWidget(show_project_);
+  auto* buttons3 = new QHBoxLayout;
+  buttons3->addWidget(refine_);
 
   auto* evidence = new QGroupBox(tr("Evidence"), this);
   auto* form = new QFormLayout(evidence);
@@ -93,6 +100,7 @@ PairPanel::PairPanel(QWidget* parent) : QWidget(parent) {
   layout->addLayout(choose);
   layout->addLayout(buttons);
   layout->addLayout(buttons2);
+  layout->addLayout(buttons3);
   // The evidence scrolls when the window is short (a 1366 x 768 screen); the controls above do not.
   auto* scroll = new QScrollArea(this);
   scroll->setObjectName("EvidenceScroll");

@@ -46,11 +46,13 @@ class PairPanel : public QWidget {
   QPushButton* runButton() const { return run_; }
   QPushButton* cancelButton() const { return cancel_; }
   QPushButton* useButton() const { return use_; }
+  QPushButton* refineButton() const { return refine_; }
 
  signals:
   void RunRequested();
   void CancelRequested();
   void UseResultRequested();
+  void RefineRequested();
   void ShowProjectRequested();
 
  private:
@@ -65,6 +67,7 @@ class PairPanel : public QWidget {
   QPushButton* cancel_ = nullptr;
   QPushButton* use_ = nullptr;
   QPushButton* show_project_ = nullptr;
+  QPushButton* refine_ = nullptr;
   QMap<QString, QLabel*> fields_;
 };
 

@@ -69,6 +69,12 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
                             "it (Registration → Release hand placement lets the registration place it)"));
     } else if (state == io::PoseState::kImported) {
       status->setToolTip(tr("Pose read from a file (pose file or the scan's header): no link evidence of ours"));
+    } else if (state == io::PoseState::kUnregistered && !s.cluster.empty()) {
+      status->setText(tr("cluster of %1").arg(QString::fromStdString(s.cluster)));
+      status->setForeground(QColor(150, 80, 170));
+      status->setToolTip(tr("Registered to the other scans of the cluster of %1 but not to the root: one link to a "
+                            "registered scan (align by picked points, or a parent) places the whole cluster")
+                             .arg(QString::fromStdString(s.cluster)));
     } else if (state == io::PoseState::kRegistered && on_hand[i]) {
       status->setText(tr("on a hand placement"));
       status->setForeground(QColor(200, 130, 0));

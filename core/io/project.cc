@@ -271,6 +271,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       }
       scan.unregistered_reason = s.value("unregistered_reason", "");
       scan.manual_pose = s.value("manual_pose", false);
+      scan.cluster = s.value("cluster", "");
       scan.imported_pose = s.value("imported_pose", false);
       project.scans.push_back(std::move(scan));
     }
@@ -335,6 +336,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
     if (s.coarse_world_from_scan) js["coarse_world_from_scan"] = PoseToJson(*s.coarse_world_from_scan);
     if (!s.unregistered_reason.empty()) js["unregistered_reason"] = s.unregistered_reason;
     if (s.manual_pose) js["manual_pose"] = true;
+    if (!s.cluster.empty()) js["cluster"] = s.cluster;
     if (s.imported_pose) js["imported_pose"] = true;
     scans.push_back(std::move(js));
   }

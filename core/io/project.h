@@ -70,6 +70,11 @@ struct ProjectScan {
   // registered pose: PTX/E57 header) and is used as it is: `registered` is true, merge and export
   // accept it. Cleared when a registration re-estimates the scan (kept with --keep-imported).
   bool imported_pose = false;
+  // Not registered to the root, but registered to other scans that are not either: the name of the
+  // root of that cluster (the scan itself for its root); empty when none. world_from_scan then holds
+  // the cluster's own frame (the cluster root's pose), so one link to a registered scan places the
+  // whole cluster (pipeline::ApplyPairResult). Cleared when the scan is registered.
+  std::string cluster;
 };
 
 // Where a scan's pose comes from, for every front end and the report (one wording).

@@ -1,10 +1,14 @@
 #include "core/pipeline/merge_scans.h"
 
+#include "core/pipeline/scale_defaults.h"
+
 #include "core/io/las_writer.h"
 #include "core/common/log.h"
 #include "core/io/text_parse.h"
 #include "core/pipeline/moving_points.h"
+#include "core/pipeline/scale_defaults.h"
 
+#include <algorithm>
 #include <string>
 
 #include "core/merge/mesh_io.h"
@@ -96,6 +100,25 @@ Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
     return io::WriteLas(path, cloud);
   }
   return merge::WritePointCloudPly(path, mesh.origin, mesh.vertices);
+}
+
+MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
+                               MergeEstimate* estimate) {
+  MergeEstimate e;
+  if (!scans.empty()) {
+    const ProjectScale scale = MeasureProjectScale(scans);
+    const double from_data = std::max(scale.extent_m / 1000.0, scale.spacing_m);
+    if (from_data > 0) options.voxel_m = std::clamp(from_data, 1e-3, std::max(1e-3, options.voxel_m));
+    const std::size_t budget =
+        options.memory_budget_bytes > 0 ? options.memory_budget_bytes : merge::DefaultMemoryBudget();
+    for (int doubling = 0; doubling < 12; ++doubling) {
+      e = merge::EstimateMerge(scans, options);
+      if (e.seconds <= max_seconds && e.bytes <= budget / 2) break;
+      options.voxel_m *= 2.0;
+    }
+  }
+  if (estimate) *estimate = e;
+  return options;
 }
 
 }  // namespace scanreg::pipeline

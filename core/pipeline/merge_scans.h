@@ -9,6 +9,7 @@
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
 #include "core/merge/merge.h"
+#include "core/merge/merge_estimate.h"
 #include "core/merge/merge_options.h"
 #include "core/merge/mesh.h"
 
@@ -26,6 +27,13 @@ using merge::Mesh;
 // fits; merge_estimate.h), cancelled (kCancelled; nothing is written anywhere).
 Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel);
+
+// Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
+// data's scale — a thousandth of the scans' median extent, at least their point spacing, between
+// 1 mm and options.voxel_m — and doubles until the estimate (merge_estimate.h) takes at most
+// max_seconds and half the memory budget. *estimate: the estimate of the options returned.
+MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
+                               MergeEstimate* estimate);
 
 // Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic.
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);

@@ -26,8 +26,13 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
                                                       "' is not registered; register the project first or run "
                                                       "the pair the other way round");
   }
-  const std::vector<int> moved =
+  // An unregistered scan of a cluster brings its cluster along: the one link places them all.
+  const std::string cluster = project.scans[c].registered ? std::string() : project.scans[c].cluster;
+  std::vector<int> moved =
       project.scans[c].registered ? io::ScansRegisteredThrough(project, c) : std::vector<int>{c};
+  if (!cluster.empty())
+    for (int i = 0; i < static_cast<int>(project.scans.size()); ++i)
+      if (i != c && !project.scans[i].registered && project.scans[i].cluster == cluster) moved.push_back(i);
   if (std::find(moved.begin(), moved.end(), p) != moved.end()) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + link.parent + "' is registered through '" + link.child +
                                                       "'; registering " + link.child +
@@ -40,9 +45,27 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
     if (IsTreeLink(l) && l.child == link.child) old_parent = l.parent;
 
   const Eigen::Isometry3d new_pose = project.scans[p].world_from_scan * link.parent_from_child;
-  const Eigen::Isometry3d delta = project.scans[c].registered
+  const Eigen::Isometry3d delta = project.scans[c].registered || !cluster.empty()
                                       ? Eigen::Isometry3d(new_pose * project.scans[c].world_from_scan.inverse())
                                       : Eigen::Isometry3d::Identity();
+  if (!cluster.empty()) {
+    // The cluster's links from its root down to the child turn round: the child is now where the
+    // cluster hangs from, and each scan keeps one link to its parent.
+    std::string cur = link.child;
+    for (std::size_t steps = 0; cur != cluster && steps < project.links.size(); ++steps) {
+      auto up = std::find_if(project.links.begin(), project.links.end(),
+                             [&](const io::LinkRecord& l) { return IsTreeLink(l) && l.child == cur; });
+      if (up == project.links.end()) break;
+      std::swap(up->parent, up->child);
+      up->parent_from_child = up->parent_from_child.inverse();
+      cur = up->child;
+    }
+    for (int i : moved) {
+      project.scans[i].registered = true;
+      project.scans[i].cluster.clear();
+      project.scans[i].unregistered_reason.clear();
+    }
+  }
   for (int i : moved) {
     project.scans[i].world_from_scan = delta * project.scans[i].world_from_scan;
     // The stored coarse pose belongs to the automatic run this edit replaces (the report's
@@ -129,6 +152,9 @@ Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector
   io::Project after = project;
   after.scans[c].parent_override = parent;
   options.only_scans = {child};
+  if (!project.scans[c].cluster.empty())  // its cluster goes with it
+    for (const io::ProjectScan& s : project.scans)
+      if (s.name != child && !s.registered && s.cluster == project.scans[c].cluster) options.only_scans.push_back(s.name);
   if (project.scans[c].registered)
     for (int i : io::ScansRegisteredThrough(project, c))
       if (i != c) options.only_scans.push_back(project.scans[i].name);

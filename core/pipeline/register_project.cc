@@ -198,6 +198,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   };
   source.min_check_weight = options.min_check_matches;
   source.position_partners = 3;
+  source.clusters = true;
   source.no_link_reason = "no link to a registered scan: no overlapping scan with enough feature matches";
   SubProgress pair_progress(progress, 0.5, 1.0);
   if (Status s = DriveRegistration(scans, *choices, source, options, pair_progress, cancel, &result); !s) {
@@ -217,6 +218,12 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
       ps.manual_pose = false;
     }
     ps.unregistered_reason = ps.registered ? "" : result.scans[i].reason;
+    ps.cluster.clear();
+    if (!ps.registered && result.scans[i].cluster >= 0) {  // placed in its cluster's frame
+      const int root = result.scans[i].cluster;
+      ps.cluster = result.scans[root].name;
+      ps.world_from_scan = project.scans[root].world_from_scan * result.scans[i].cluster_from_scan;
+    }
     ps.coarse_world_from_scan.reset();
     if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;
   }
@@ -304,6 +311,7 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
                  "); it keeps its imported pose");
       ps.registered = ps.imported_pose = true;
       ps.world_from_scan = old.world_from_scan;
+      ps.cluster.clear();
     }
   }
   if (!options.only_scans.empty()) {  // links: the old ones of the scans outside the scope, the new ones inside

@@ -25,6 +25,10 @@ struct ScanRegistration {
   std::string reason;  // why not registered
   int parent = -1;     // index of the scan it was registered to; -1 for the root
   Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
+  // Not registered, but in a cluster of scans registered to each other (issue 14): the index of
+  // the cluster's root scan and the pose in its frame; -1 when none.
+  int cluster = -1;
+  Eigen::Isometry3d cluster_from_scan = Eigen::Isometry3d::Identity();
   bool has_coarse = false;  // world pose from the coarse links only (W fig. 6 "after coarse")
   Eigen::Isometry3d coarse_world_from_scan = Eigen::Isometry3d::Identity();
 };

@@ -201,6 +201,53 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     if (!changed && !add_position_partners()) break;
   }
 
+  // Clusters among the scans left out: each grows from the heaviest edge between them.
+  std::vector<int> cluster_of(n, -1), cluster_parent(n, -1);
+  std::vector<Eigen::Isometry3d> cluster_pose(n, Eigen::Isometry3d::Identity());
+  if (source.clusters) {
+    std::vector<bool> free(n, false);
+    for (int i = 0; i < n; ++i) free[i] = i != order.root && order.parent[i] < 0;
+    for (int round = 0; round < n; ++round) {
+      int best = source.min_weight - 1, croot = -1;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+          if (i != j && free[i] && free[j] && weights(i, j) > best && !Contains(excluded, i, j)) best = weights(i, j), croot = i;
+      if (croot < 0) break;
+      Eigen::MatrixXi w = Eigen::MatrixXi::Zero(n, n);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+          if (free[i] && free[j]) w(i, j) = weights(i, j);
+      ScanOrder co;
+      for (int attempt = 0; attempt < n * n; ++attempt) {
+        Expected<ScanOrder> o = ComputeScanOrder(w, croot, {}, excluded, source.min_weight);
+        if (!o) return o.error();
+        co = *o;
+        bool changed = false;
+        for (int child : co.order) {
+          const int parent = co.parent[child];
+          if (parent < 0) continue;
+          if (cancel.IsCancelled()) return Cancelled();
+          if (link(parent, child).link.status == io::LinkStatus::kFailed) {
+            excluded.emplace_back(parent, child);
+            changed = true;
+            break;
+          }
+          cluster_pose[child] = cluster_pose[parent] * done.at({parent, child}).link.parent_from_child;
+        }
+        if (!changed) break;
+      }
+      free[croot] = false;
+      if (co.order.size() < 2) continue;  // its edges all failed: no cluster
+      for (int child : co.order) {
+        cluster_of[child] = croot;
+        cluster_parent[child] = co.parent[child];
+        free[child] = false;
+      }
+      LogInfo("scans registered to each other but not to the root: a cluster of " + std::to_string(co.order.size()) +
+              " around " + scans[croot].name);
+    }
+  }
+
   // Chain world poses from the root, which keeps its current pose (W §2 step 10).
   result->root = order.root;
   result->scans.assign(n, ScanRegistration());
@@ -229,6 +276,12 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     s.has_coarse = p.has_coarse && pr.coarse_ok;
     if (s.has_coarse) s.coarse_world_from_scan = p.coarse_world_from_scan * pr.coarse_parent_from_child;
     result->links.push_back(pr.link);
+  }
+  for (int i = 0; i < n; ++i) {
+    if (cluster_of[i] < 0 || result->scans[i].registered) continue;
+    result->scans[i].cluster = cluster_of[i];
+    result->scans[i].cluster_from_scan = cluster_pose[i];
+    if (cluster_parent[i] >= 0) result->links.push_back(done.at({cluster_parent[i], i}).link);
   }
   // Loop-check links that closed (evidence, not chained).
   for (int child = 0; child < n; ++child) {

@@ -44,6 +44,9 @@ struct LinkSource {
   // placed scans nearest to its prior pose or to its placed neighbours in capture order (0: none).
   int position_partners = 0;
   std::string no_link_reason;
+  // Clusters (issue 14): the scans the tree leaves out are registered to each other along trees of
+  // their own (heaviest edge first; no loop checks), so that one link places each group later.
+  bool clusters = false;
 };
 
 // Runs the driver on prepared scans; `result` arrives with the timings and the confusion matrix of

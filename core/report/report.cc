@@ -167,18 +167,23 @@ std::string PosesSection(const io::Project& p) {
       "scanner's and the world's z axes (degrees).</p>\n";
   HtmlTable t("poses-table", {"scan", "status", "x (m)", "y (m)", "z (m)", "heading (°)", "pitch (°)", "roll (°)",
                               "tilt (°)", "world_from_scan"});
-  for (const io::ProjectScan& s : p.scans) {
+  const std::vector<bool> on_hand = io::RestsOnHandPlacement(p);
+  for (std::size_t i = 0; i < p.scans.size(); ++i) {
+    const io::ProjectScan& s = p.scans[i];
     const Eigen::Vector3d x = s.world_from_scan.translation();
     const HeadingPitchRoll a = HeadingPitchRollFromRotation(s.world_from_scan.linear());
     std::string status = s.registered ? (p.root && *p.root == s.name ? "root" : "registered") : "not registered";
+    if (!s.registered && !s.cluster.empty()) status += " (in the cluster of " + s.cluster + ")";
     if (!s.registered && !s.unregistered_reason.empty()) status += ": " + s.unregistered_reason;
     if (s.registered && s.manual_pose) status = "placed by hand (no link evidence)";
+    if (s.registered && !s.manual_pose && on_hand[i])
+      status = "registered through a scan placed by hand: its pose carries that placement's error";
     if (s.registered && !s.manual_pose && s.imported_pose) status = "imported from a file (no link evidence)";
     t.AddRow({Escape(s.name), Escape(status), Fixed(x.x(), 4), Fixed(x.y(), 4), Fixed(x.z(), 4),
               Fixed(a.heading * kDeg, 4), Fixed(a.pitch * kDeg, 4), Fixed(a.roll * kDeg, 4),
               Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan)},
              !s.registered                      ? "failed"
-             : s.manual_pose || s.imported_pose ? "weak"
+             : s.manual_pose || s.imported_pose || on_hand[i] ? "weak"
                                                 : "ok");
   }
   return html + t.Html();

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "core/geometry/transform.h"
@@ -295,6 +296,71 @@ TEST_F(UserDecisions, AFailingOverrideKeepsTheOldLinkAndAWorkingOneMovesOnlyTheS
   EXPECT_LT(ErrorOf(project, 3).position_m, 0.02) << moved->message;
   EXPECT_FALSE(OverrideParent(project, scans, "s01", std::string("s02"), RegisterOptions(), progress, CancelToken()).ok())
       << "the root has no parent";
+}
+
+// Scans that register to each other but not to the root form a cluster (kept in its own frame, shown
+// as such); one link from a registered scan to any scan of it places the whole cluster.
+TEST(Clusters, AGroupThatDoesNotReachTheRootIsKeptTogetherAndJoinedByOneLink) {
+  SimulatedProjectOptions a = Street(2, 5.0), b = Street(2, 5.0);
+  a.scanner.cols = b.scanner.cols = 1000;
+  a.scanner.rows = b.scanner.rows = 250;
+  b.seed = b.scene.seed = 99;  // another street: nothing in common with the first
+  std::vector<Scan> scans = Simulate(a);
+  for (Scan& s : Simulate(b)) {
+    s.name = "t" + s.name.substr(1);
+    scans.push_back(std::move(s));
+  }
+  ASSERT_EQ(scans.size(), 4u);
+  io::Project project = ProjectOf(scans);
+  project.root = "s01";
+  NullProgress progress;
+  Expected<ProjectRegistration> r = RegisterProjectScans(project, scans, RegisterOptions(), progress, CancelToken());
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_TRUE(project.scans[1].registered) << project.scans[1].unregistered_reason;
+  ASSERT_FALSE(project.scans[2].registered);
+  ASSERT_FALSE(project.scans[3].registered);
+  const std::string cluster = project.scans[2].cluster;
+  ASSERT_FALSE(cluster.empty()) << project.scans[2].unregistered_reason;
+  EXPECT_EQ(project.scans[3].cluster, cluster);
+  EXPECT_TRUE(project.scans[0].cluster.empty());
+  // Within the cluster the relative pose is registered: t02 from t01 within 2 cm / 0.1 degree.
+  const auto relative = [&](const io::Project& p) {
+    return ComparePoses(p.scans[2].world_from_scan.inverse() * p.scans[3].world_from_scan,
+                        scans[2].reference_world_from_scan->inverse() * *scans[3].reference_world_from_scan);
+  };
+  EXPECT_LT(relative(project).position_m, 0.02);
+  EXPECT_LT(relative(project).angle_rad, 0.1 * kDeg);
+  // Saved and read back, the cluster is still there.
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / "scanreg_clusters_test.scanreg.json";
+  for (io::ProjectScan& s : project.scans) s.path = file;  // any existing file: only the project is read
+  ASSERT_TRUE(io::SaveProject(project, file).ok());
+  Expected<io::Project> back = io::LoadProject(file);
+  std::filesystem::remove(file);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->scans[3].cluster, cluster);
+
+  // One link, s02 -> t02 (any pose: the streets are unrelated), places both t01 and t02.
+  io::LinkRecord join;
+  join.parent = "s02";
+  join.child = "t02";
+  join.status = io::LinkStatus::kOk;
+  join.method = "picked+dense";
+  join.parent_from_child = Eigen::Translation3d(30, 5, 0) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ());
+  ASSERT_TRUE(ApplyPairResult(join, project).ok());
+  for (int i : {2, 3}) {
+    EXPECT_TRUE(project.scans[i].registered);
+    EXPECT_TRUE(project.scans[i].cluster.empty());
+  }
+  EXPECT_TRUE(project.scans[3].world_from_scan.isApprox(project.scans[1].world_from_scan * join.parent_from_child, 1e-9));
+  EXPECT_LT(relative(project).position_m, 0.02) << "the cluster moved as one";
+  // Every scan but the root has exactly one tree link, and following them reaches the root.
+  for (std::size_t i = 1; i < project.scans.size(); ++i) {
+    int into = 0;
+    for (const io::LinkRecord& l : project.links) into += io::IsTreeLink(l) && l.child == project.scans[i].name;
+    EXPECT_EQ(into, 1) << project.scans[i].name;
+  }
+  const std::vector<int> reached = io::ScansRegisteredThrough(project, 0);
+  EXPECT_EQ(reached.size(), 4u);
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 #include "core/pipeline/create_project.h"
 #include "tests/ui/wait_for_job.h"
 #include "ui/main_window.h"
+#include "ui/pair_inspector.h"
+#include "ui/pair_panel.h"
 #include "ui/pick_points_dialog.h"
 
 using scanreg::test::WaitForJob;
@@ -148,6 +150,24 @@ class ManualAlignmentTest : public QObject {
     QVERIFY2(window.project().scans[1].registered, window.project().scans[1].unregistered_reason.c_str());
     QVERIFY(scanreg::ComparePoses(window.project().scans[1].world_from_scan, truth2).position_m < 0.02);
     QVERIFY(!window.RegisterUnregistered());  // nothing left to place
+
+    // Placed by hand 15 cm and 1 degree off, s02 is refined from there by the pair panel's button.
+    const Eigen::Isometry3d near = truth2 * Eigen::Translation3d(0.15, -0.05, 0.0) *
+                                   Eigen::AngleAxisd(1.0 * kDeg, Eigen::Vector3d::UnitZ());
+    QVERIFY(window.SetScanPose("s02", window.project().scans[0].world_from_scan * truth1.inverse() * near, false));
+    scanreg::ui::PairPanel* panel = window.pairInspector()->pairPanel();
+    panel->SetPair("s01", "s02");
+    QTest::mouseClick(panel->refineButton(), Qt::LeftButton);
+    QVERIFY(WaitForJob(window, 300000));
+    const scanreg::io::LinkRecord* refined = TreeLink(window.project(), "s02");
+    QVERIFY(refined != nullptr);
+    QVERIFY2(QString::fromStdString(refined->method).startsWith("none+"), refined->method.c_str());
+    QVERIFY(!window.project().scans[1].manual_pose);
+    const scanreg::PoseError r = scanreg::ComparePoses(
+        window.project().scans[0].world_from_scan.inverse() * window.project().scans[1].world_from_scan,
+        truth1.inverse() * truth2);
+    QVERIFY2(r.position_m < 0.02 && r.angle_rad < 0.1 * kDeg,
+             qPrintable(QString("%1 m, %2 deg").arg(r.position_m).arg(r.angle_rad / kDeg)));
   }
 
   void TooFewOrNoParentIsExplained() {
