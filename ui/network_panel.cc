@@ -75,6 +75,7 @@ NetworkPanel::NetworkPanel(QWidget* parent) : ZoomView(parent) {
   setScene(new QGraphicsScene(this));
   setBackgroundBrush(palette().base());
   setMinimumSize(240, 200);
+  SetMargin(30);  // nodes and labels are drawn at screen size around their positions
 }
 
 void NetworkPanel::Show(const io::Project& project) {

@@ -25,9 +25,9 @@ void ZoomView::Fit() {
   // much again around them.
   setSceneRect(items.adjusted(-items.width(), -items.height(), items.width(), items.height()));
   fitInView(items, Qt::KeepAspectRatio);
-  // A margin of 30 pixels: items drawn at screen size (nodes, labels) stay inside.
   const QSize v = viewport()->size();
-  const double f = std::min(1.0 - 60.0 / std::max(120, v.width()), 1.0 - 60.0 / std::max(120, v.height()));
+  const double m = 2.0 * margin_px_;
+  const double f = std::min(1.0 - m / std::max(2.0 * m, double(v.width())), 1.0 - m / std::max(2.0 * m, double(v.height())));
   scale(f, f);
   centerOn(items.center());
 }

@@ -13,7 +13,9 @@ class ZoomView : public QGraphicsView {
  public:
   explicit ZoomView(QWidget* parent);
 
-  void Fit();  // the whole scene in view, aspect kept
+  void Fit();  // the whole scene in view, aspect kept, margin_px around it
+  // Room around the items on Fit, for items drawn at screen size (the network's nodes and labels).
+  void SetMargin(int pixels) { margin_px_ = pixels; }
   // Called with the scene position of a click (press and release within a few pixels).
   std::function<void(QPointF scene_pos)> on_click;
 
@@ -26,6 +28,7 @@ class ZoomView : public QGraphicsView {
 
  private:
   QPoint pressed_at_;
+  int margin_px_ = 4;
 };
 
 }  // namespace scanreg::ui
