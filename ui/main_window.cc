@@ -519,7 +519,11 @@ PickPointsDialog* MainWindow::PickPoints(const QString& child) {
                                                 : tr("Select the scan to align in the scan list first."));
     return nullptr;
   }
-  auto* dialog = new PickPointsDialog(scans(), child, parents, this);
+  auto fetch = [this](const QString& name) -> const Scan* {
+    const int i = project().FindScan(name.toStdString());
+    return i >= 0 && i < static_cast<int>(scans().size()) ? &scans()[i] : nullptr;
+  };
+  auto* dialog = new PickPointsDialog(fetch, child, parents, this);
   dialog->setAttribute(Qt::WA_DeleteOnClose);
   connect(dialog, &QDialog::accepted, this, [this, dialog] {
     AlignFromPickedPoints(dialog->ParentScan(), dialog->ChildScan(), dialog->Pairs(), dialog->Levelled());

@@ -59,9 +59,9 @@ Eigen::Vector3d PointAt(const Scan& scan, int row, int col) { return scan.Point(
 
 }  // namespace
 
-PickPointsDialog::PickPointsDialog(const std::vector<Scan>& scans, const QString& child, const QStringList& parents,
-                                   QWidget* parent)
-    : QDialog(parent), scans_(scans), child_name_(child) {
+PickPointsDialog::PickPointsDialog(FetchScan fetch, const QString& child, const QStringList& parents, QWidget* parent)
+    : QDialog(parent), fetch_(std::move(fetch)), child_name_(child) {
+  if (const Scan* c = fetch_(child)) child_scan_ = *c;
   setObjectName("PickPointsDialog");
   setWindowTitle(tr("Align %1 by picked points").arg(child));
   parent_box_ = new QComboBox(this);
@@ -144,12 +144,14 @@ PickPointsDialog::PickPointsDialog(const std::vector<Scan>& scans, const QString
 QString PickPointsDialog::ParentScan() const { return parent_box_->currentText(); }
 
 const Scan* PickPointsDialog::FindScan(const QString& name) const {
-  for (const Scan& s : scans_)
-    if (QString::fromStdString(s.name) == name) return &s;
+  if (child_scan_ && name == child_name_) return &*child_scan_;
+  if (parent_scan_ && QString::fromStdString(parent_scan_->name) == name) return &*parent_scan_;
   return nullptr;
 }
 
 void PickPointsDialog::ShowScans() {
+  parent_scan_.reset();
+  if (const Scan* p = fetch_(ParentScan())) parent_scan_ = *p;
   for (auto [scene, name] : {std::make_pair(parent_scene_, ParentScan()), std::make_pair(child_scene_, child_name_)}) {
     scene->clear();
     if (const Scan* s = FindScan(name)) scene->addPixmap(QPixmap::fromImage(PickingImage(*s)))->setZValue(-1);

@@ -9,6 +9,8 @@
 #include <QPointF>
 #include <QString>
 #include <QStringList>
+#include <functional>
+#include <optional>
 #include <vector>
 
 #include "core/geometry/scan.h"
@@ -30,9 +32,10 @@ class PickPointsDialog : public QDialog {
 
  public:
   // child: the scan to align; parents: the registered scans it may be aligned to (first: the
-  // default). `scans`: the project's scans, copied (the dialog does not block the window).
-  PickPointsDialog(const std::vector<Scan>& scans, const QString& child, const QStringList& parents,
-                   QWidget* parent = nullptr);
+  // default). `fetch` gives a scan of the open project by name (null: gone); the dialog keeps a copy
+  // of the two scans it shows (it does not block the window), never the whole project.
+  using FetchScan = std::function<const Scan*(const QString& name)>;
+  PickPointsDialog(FetchScan fetch, const QString& child, const QStringList& parents, QWidget* parent = nullptr);
 
   QString ParentScan() const;
   QString ChildScan() const { return child_name_; }
@@ -56,7 +59,8 @@ class PickPointsDialog : public QDialog {
   void Update();  // markers, table, status
   const Scan* FindScan(const QString& name) const;
 
-  std::vector<Scan> scans_;
+  FetchScan fetch_;
+  std::optional<Scan> parent_scan_, child_scan_;
   QString child_name_;
   QComboBox* parent_box_ = nullptr;
   ZoomView* parent_view_ = nullptr;
