@@ -9,7 +9,8 @@
 // Under ASan + UBSan (cmake -DSCANREG_SANITIZE=ON) run with
 //   ASAN_OPTIONS=max_allocation_size_mb=2048:allocator_may_return_null=0
 // so that any allocation beyond 2 GB is reported as a failure; otherwise the data segment is
-// limited to 2 GB (setrlimit) and an allocation beyond it surfaces as std::bad_alloc.
+// limited to 2 GB (setrlimit) and an allocation beyond it surfaces as std::bad_alloc. Put --work on
+// a tmpfs (/dev/shm): each input is written and read back, and a disk makes that ~40x slower.
 #include <sys/resource.h>
 #include <unistd.h>
 
