@@ -281,7 +281,14 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
                                                      *scan.parent_override + "' is not a scan of the project");
       }
     }
-    if (j.contains("root") && !j["root"].is_null()) project.root = j["root"].get<std::string>();
+    if (j.contains("root") && !j["root"].is_null()) {
+      project.root = j["root"].get<std::string>();
+      if (project.FindScan(*project.root) < 0) {
+        return MakeError(ErrorCode::kParseError, where + ": the root '" + *project.root +
+                                                     "' is not a scan of the project; name one of its scans or "
+                                                     "remove 'root'");
+      }
+    }
     if (j.contains("links")) {
       int k = 0;
       for (const json& l : j["links"]) {

@@ -1,6 +1,7 @@
 #include "core/pipeline/create_project.h"
 
 #include <algorithm>
+#include <map>
 #include <set>
 
 #include "core/common/log.h"
@@ -64,12 +65,19 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
                   io::Project& project) {
   std::string unmatched;
   int unmatched_count = 0;
+  std::map<std::string, std::string> posed;  // scan name -> the pose entry that set it
   for (const io::NamedPose& pose : poses) {
     bool matched = false;
     for (io::ProjectScan& scan : project.scans) {
       const bool same = scan.name == pose.scan || scan.path.filename().string() == pose.scan ||
                         scan.path.stem().string() == pose.scan;
       if (!same) continue;
+      // Two entries for one scan: which one is meant cannot be guessed.
+      if (const auto [it, added] = posed.emplace(scan.name, pose.scan); !added) {
+        return MakeError(ErrorCode::kInvalidArgument, "pose file '" + pose_file.string() + "' gives scan '" +
+                                                          scan.name + "' two poses ('" + it->second + "' and '" +
+                                                          pose.scan + "'); keep one");
+      }
       if (reference) {
         scan.reference_world_from_scan = pose.world_from_scan;
       } else {

@@ -84,6 +84,23 @@ TEST(ProjectTest, AMissingScanFileStillReadsTheProject) {
   EXPECT_EQ(q->scans[1].path, std::filesystem::absolute(dir / "scans" / "b.ptx").lexically_normal());
 }
 
+// A root that names no scan is refused when the project is read (it used to be shown as the root).
+TEST(ProjectTest, ARootThatIsNotAScanIsAClearError) {
+  test::TempDir dir;
+  Project p = TwoScanProject(dir);
+  p.root = "a";
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  std::ifstream in(dir / "p.scanreg.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("\"root\": \"a\"");
+  ASSERT_NE(at, std::string::npos) << text.substr(0, 400);
+  text.replace(at, std::string("\"root\": \"a\"").size(), "\"root\": \"ghost\"");
+  std::ofstream(dir / "q.scanreg.json") << text;
+  Expected<Project> q = LoadProject(dir / "q.scanreg.json");
+  ASSERT_FALSE(q.ok());
+  EXPECT_NE(q.error().message.find("'ghost' is not a scan"), std::string::npos) << q.error().message;
+}
+
 TEST(ProjectTest, UnknownSchemaVersionAndGarbageAreClearErrors) {
   test::TempDir dir;
   std::ofstream(dir / "future.scanreg.json") << R"({"schema_version": 99, "scans": []})";

@@ -138,6 +138,24 @@ TEST(AppendScanFiles, BatchAddAddsEveryReadableFileAndListsEveryError) {
   EXPECT_NE(skipped[3].find("already in the project"), std::string::npos) << skipped[3];
 }
 
+// Two poses for one scan in a pose file: refused, naming the scan (it used to take the last one).
+TEST(CreateProject, TwoPosesForOneScanAreRefused) {
+  test::TempDir dir;
+  const auto a = WritePtxFile(dir, "a.ptx", {PlaneScan("a", 0.0)});
+  const auto b = WritePtxFile(dir, "b.ptx", {PlaneScan("b", 0.0)});
+  const std::vector<io::NamedPose> poses = {{"a", Eigen::Isometry3d::Identity(), ""},
+                                            {"a", Eigen::Isometry3d(Eigen::Translation3d(1, 2, 3)), ""}};
+  ASSERT_TRUE(io::WritePosesJson(dir / "p.json", poses).ok());
+  CreateProjectOptions options;
+  options.scan_files = {a, b};
+  options.poses = dir / "p.json";
+  NullProgress progress;
+  auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
+  ASSERT_FALSE(project.ok());
+  EXPECT_NE(project.error().message.find("scan 'a' two poses"), std::string::npos) << project.error().message;
+  EXPECT_FALSE(std::filesystem::exists(dir / "p.scanreg.json"));
+}
+
 // A pose read from a file is used as it is: the scan is 'imported' (registered, no link evidence).
 TEST(CreateProject, EveryPoseFormatExportPosesWritesIsImported) {
   test::TempDir dir;
