@@ -294,6 +294,13 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       for (const json& l : j["links"]) {
         auto link = LinkFromJson(l, where + ", link " + std::to_string(k++));
         if (!link) return link.error();
+        for (const std::string& end : {link->parent, link->child}) {
+          if (project.FindScan(end) < 0) {
+            return MakeError(ErrorCode::kParseError, where + ", link " + std::to_string(k) + ": '" + end +
+                                                         "' is not a scan of the project; remove the link or "
+                                                         "register again");
+          }
+        }
         project.links.push_back(std::move(*link));
       }
     }

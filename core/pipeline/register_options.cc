@@ -66,8 +66,10 @@ Status RegisterOptions::Validate() const {
   if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
     return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m (0: from the data)");
   }
-  if (!(overlap_distance_m >= 0 && overlap_distance_m <= 100)) {
-    return MakeError(ErrorCode::kInvalidArgument, "the overlap distance must be between 0 and 100 m (0: from the data)");
+  if (!(overlap_distance_m == 0 || (overlap_distance_m >= 1e-5 && overlap_distance_m <= 100))) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "the overlap distance must be between 0.00001 and 100 m (0: from the data); below that it is "
+                     "finer than any scanner measures");
   }
   // Unset lengths checked at nominal values (they are resolved from the data when registering).
   const RegisterOptions o = WithLengths(*this, 0.012, overlap_distance_m > 0 ? overlap_distance_m : 0.1);

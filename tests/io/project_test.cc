@@ -85,7 +85,7 @@ TEST(ProjectTest, AMissingScanFileStillReadsTheProject) {
 }
 
 // A root that names no scan is refused when the project is read (it used to be shown as the root).
-TEST(ProjectTest, ARootThatIsNotAScanIsAClearError) {
+TEST(ProjectTest, ARootOrALinkThatNamesNoScanIsAClearError) {
   test::TempDir dir;
   Project p = TwoScanProject(dir);
   p.root = "a";
@@ -99,6 +99,16 @@ TEST(ProjectTest, ARootThatIsNotAScanIsAClearError) {
   Expected<Project> q = LoadProject(dir / "q.scanreg.json");
   ASSERT_FALSE(q.ok());
   EXPECT_NE(q.error().message.find("'ghost' is not a scan"), std::string::npos) << q.error().message;
+  // The same for a link to a scan the project does not have.
+  Project linked = TwoScanProject(dir);
+  LinkRecord l;
+  l.parent = "a";
+  l.child = "ghost";
+  linked.links.push_back(l);
+  ASSERT_TRUE(SaveProject(linked, dir / "r.scanreg.json").ok());
+  Expected<Project> r = LoadProject(dir / "r.scanreg.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("'ghost' is not a scan"), std::string::npos) << r.error().message;
 }
 
 TEST(ProjectTest, UnknownSchemaVersionAndGarbageAreClearErrors) {
