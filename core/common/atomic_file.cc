@@ -19,19 +19,35 @@ std::atomic<unsigned> g_counter{0};
 // glob of the folder does not pick them up).
 std::string TempPrefix(const std::filesystem::path& target) { return "." + target.filename().string() + ".tmp-"; }
 
-// Removes the temporary files of `target` left by processes that no longer run (killed mid-write).
+// The pid in ".<name>.tmp-<pid>-<n>" (all of <pid> and <n> digits), or 0 when `file` is not one of our
+// temporaries.
+long TemporaryOwner(const std::string& file) {
+  if (file.size() < 2 || file[0] != '.') return 0;
+  const std::size_t at = file.rfind(".tmp-");
+  if (at == std::string::npos || at == 0) return 0;
+  const char* p = file.c_str() + at + 5;
+  char* end = nullptr;
+  const long pid = std::strtol(p, &end, 10);
+  if (pid <= 0 || end == p || *end != '-') return 0;
+  const char* n = end + 1;
+  if (*n == '\0') return 0;
+  for (; *n != '\0'; ++n)
+    if (*n < '0' || *n > '9') return 0;
+  return pid;
+}
+
+// Removes the temporaries that processes killed mid-write left in the target's folder (of any
+// file there, so that a killed export of one scan does not stay behind until that scan is
+// exported again). A temporary whose process still runs is never touched.
 void RemoveStaleTemporaries(const std::filesystem::path& target) {
-  const std::string prefix = TempPrefix(target);
   std::error_code ec;
   const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : ".";
   for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    char* end = nullptr;
-    const long pid = std::strtol(name.c_str() + prefix.size(), &end, 10);
-    if (pid <= 0 || end == nullptr || *end != '-') continue;
+    const long pid = TemporaryOwner(e.path().filename().string());
+    if (pid == 0) continue;
     if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to judge)
-    std::filesystem::remove(e.path(), ec);
+    std::error_code rm;
+    if (e.is_regular_file(rm)) std::filesystem::remove(e.path(), rm);
   }
 }
 

@@ -1,7 +1,7 @@
 // Atomic file replacement: write a temporary file beside the target, flush and fsync it, then
 // rename it over the target. Readers never see a half-written file; a failed write leaves the
 // old target untouched. The temporary is hidden (".<name>.tmp-<pid>-<n>"); those of a process that
-// was killed mid-write are removed when the same target is written again.
+// was killed mid-write are removed when a file is next written into the same folder.
 #pragma once
 
 #include <filesystem>

@@ -40,8 +40,9 @@ TEST(AtomicFileTest, CommitReplacesTheTargetAndLeavesNoTemporary) {
   EXPECT_EQ(CountFiles(dir.path()), 1);
 }
 
-// A process killed mid-write leaves its temporary; the next write of the same file removes it, but
-// never one of a process that still runs. Temporaries are hidden from listings and globs.
+// A process killed mid-write leaves its temporary; the next write into the same folder removes it
+// (whichever file it was for), but never one of a process that still runs, nor a file that only
+// looks similar. Temporaries are hidden from listings and globs.
 TEST(AtomicFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
   test::TempDir dir;
   const auto path = dir / "a.txt";
@@ -56,7 +57,8 @@ TEST(AtomicFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
   const auto stale = dir / (".a.txt.tmp-" + std::to_string(dead) + "-0");
   const auto live = dir / (".a.txt.tmp-" + std::to_string(::getpid()) + "-99999");
   const auto other = dir / (".b.txt.tmp-" + std::to_string(dead) + "-0");
-  for (const auto& f : {stale, live, other}) std::ofstream(f) << "partial";
+  const auto user = dir / (".b.txt.tmp-" + std::to_string(dead) + "-notes");
+  for (const auto& f : {stale, live, other, user}) std::ofstream(f) << "partial";
   AtomicFile file(path);
   EXPECT_EQ(file.temp_path().filename().string().rfind(".a.txt.tmp-", 0), 0u) << file.temp_path();
   ASSERT_TRUE(file.Open().ok());
@@ -64,7 +66,8 @@ TEST(AtomicFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
   ASSERT_TRUE(file.Commit().ok());
   EXPECT_FALSE(std::filesystem::exists(stale));
   EXPECT_TRUE(std::filesystem::exists(live)) << "a running process's temporary stays";
-  EXPECT_TRUE(std::filesystem::exists(other)) << "only the temporaries of the file being written";
+  EXPECT_FALSE(std::filesystem::exists(other)) << "a dead process's temporary of another file in the folder";
+  EXPECT_TRUE(std::filesystem::exists(user)) << "only names of the form .<name>.tmp-<pid>-<n>";
 }
 
 TEST(AtomicFileTest, AbandonedWriteKeepsTheOldFile) {
