@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "app/cli_commands.h"
+#include "app/cli_georef.h"
 #include "app/cli_util.h"
 #include "core/geometry/transform.h"
 #include "core/io/output_paths.h"
@@ -20,7 +21,8 @@ int RunNew(const std::vector<std::string>& argv) {
                           {{"poses", true, false,
                             "FILE     imported poses: Stanford .conf, or what export-poses writes (.json, .csv,\n"
                             "                     a 4x4 <scan>.txt or a folder of them); the scans are 'imported'"},
-                           {"reference-poses", true, false, "FILE   reference (ground-truth) poses, same formats"}},
+                           {"reference-poses", true, false, "FILE   reference (ground-truth) poses, same formats"},
+                           ControlOptions()[0], ControlOptions()[1]},
                           &code);
   if (!args) return code;
   if (args->positional().size() < 2) {
@@ -30,6 +32,8 @@ int RunNew(const std::vector<std::string>& argv) {
   for (std::size_t i = 1; i < args->positional().size(); ++i) options.scan_files.emplace_back(args->positional()[i]);
   if (auto p = args->Get("poses")) options.poses = *p;
   if (auto p = args->Get("reference-poses")) options.reference_poses = *p;
+  if (auto p = args->Get("control")) options.control = *p;
+  options.check_points = args->GetAll("check");
   // A new project never replaces a file: forgetting the project name (`new s01.ptx s02.ptx`) would
   // otherwise turn the first scan into a project file, and an existing project would be lost.
   std::error_code ec;
@@ -40,7 +44,7 @@ int RunNew(const std::vector<std::string>& argv) {
                               "the scan files), or remove the old file first"));
   }
   std::vector<std::filesystem::path> inputs = options.scan_files;
-  for (const auto& p : {options.poses, options.reference_poses})
+  for (const auto& p : {options.poses, options.reference_poses, options.control})
     if (p) inputs.push_back(*p);
   if (Status s = io::CheckNotAnInput(args->positional()[0], inputs, "new: the project file"); !s) {
     return Fail(s.error());

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "app/cli_commands.h"
+#include "app/cli_georef.h"
 #include "app/cli_util.h"
 #include "core/geometry/transform.h"
 #include "core/io/project.h"
@@ -158,9 +159,12 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
   if (Status s = io::SaveProject(project, project.file); !s) return Fail(s.error());
   const auto errors = pipeline::ReferenceErrors(*result, *loaded);
   if (json) {
-    std::printf("%s\n", ToJson(*result, *loaded, errors).dump(2).c_str());
+    nlohmann::json out = ToJson(*result, *loaded, errors);
+    if (!project.control.empty()) out["georef"] = GeorefJson(project, *result);
+    std::printf("%s\n", out.dump(2).c_str());
   } else {
     PrintText(*result, *loaded, errors);
+    PrintGeoref(project, *result);
   }
   int unregistered = 0;
   for (const auto& s : result->scans) unregistered += !s.registered;
@@ -168,6 +172,11 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
     std::fprintf(stderr, "scanreg-cli: %d of %zu scans could not be registered (reasons above); project saved\n",
                  unregistered, result->scans.size());
     return 3;
+  }
+  if (!project.control.empty() && !result->georeferenced) {
+    std::fprintf(stderr, "scanreg-cli: georeferencing failed: %s; the registration is saved in the root scan's frame\n",
+                 result->georef_error.c_str());
+    return 4;
   }
   return 0;
 }
@@ -208,7 +217,14 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"refine-imported", false, false, "       re-estimate imported poses (the default)"},
        {"only-unregistered", false, false,
         "       place only the scans that are not registered; every registered scan keeps its pose and link"},
-       {"json", false, false, "       print the result as JSON"}},
+       {"json", false, false, "       print the result as JSON"},
+       ControlOptions()[0], ControlOptions()[1],
+       {"sphere-radius", true, false, "METRES   radius of the sphere targets (default 0.0725: 145 mm spheres)"},
+       {"control-tolerance", true, false,
+        "METRES   control residual tolerance: green below half, orange up to it, red beyond (default 0.01)"},
+       {"levelled", true, false,
+        "DEG      the scans are levelled (tilt compensator) to this accuracy, a constraint of the "
+        "georeferencing (default 0: not levelled)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -241,6 +257,7 @@ int RunRegister(const std::vector<std::string>& argv) {
     }
   }
   if (auto root = args->Get("root")) options->root = *root;
+  if (Status s = ImportControl(*args, &*project); !s) return Fail(s.error());
   if (args->Has("only-unregistered")) {
     for (const io::ProjectScan& s : project->scans)
       if (!s.registered) options->only_scans.push_back(s.name);

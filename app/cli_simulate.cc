@@ -21,6 +21,12 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"scene", true, false, "street|windows   scene kind (default street)"},
     {"far-station", false, false, "       add one station far away (no overlap)"},
     {"no-reflectance", false, false, "       write a constant reflectance of 0.5 (as some exporters do): geometry only"},
+    {"sphere-targets", true, false, "N        N sphere targets (145 mm) on tripods along the street, and DIR/control.csv "
+                                    "with their control coordinates (default 0)"},
+    {"control-noise", true, false, "METRES   sigma per axis of the control coordinates (default 0.002)"},
+    {"tilt", true, false, "DEG      largest tilt of a station from upright (default 0.5; 0: levelled scans)"},
+    {"utm", false, false, "       place the project at UTM-sized coordinates (E 512 km, N 5 402 km, H 100 m, grid "
+                          "turned 30°): reference poses and control in that frame"},
     {"out", true, false, "DIR      output folder (required for simulate)"},
 };
 
@@ -63,6 +69,19 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   options.scene.kind = scene == "windows" ? SceneOptions::Kind::kRepeatedWindows : SceneOptions::Kind::kStreet;
   options.add_far_station = args.Has("far-station");
   options.scanner.reflectance = !args.Has("no-reflectance");
+  auto targets = args.GetInt("sphere-targets", 0, 0, 1000);
+  if (!targets) return targets.error();
+  auto control_noise = args.GetDouble("control-noise", 0.002, 0.0, 1.0);
+  if (!control_noise) return control_noise.error();
+  auto tilt = args.GetDouble("tilt", 0.5, 0.0, 20.0);
+  if (!tilt) return tilt.error();
+  options.sphere_targets = *targets;
+  options.control_noise_m = *control_noise;
+  options.max_tilt_deg = *tilt;
+  if (args.Has("utm")) {
+    options.control_from_world.linear() = Eigen::AngleAxisd(30.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    options.control_from_world.translation() = Eigen::Vector3d(512345.678, 5401234.567, 100.25);
+  }
   if (Status s = options.Validate(); !s) return s.error();
   return options;
 }
@@ -98,6 +117,10 @@ int RunSimulate(const std::vector<std::string>& argv) {
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
   std::printf("reference poses are the true poses; scans are unregistered (identity header pose)\n");
+  if (options->sphere_targets > 0) {
+    std::printf("control points of the %d sphere targets: %s (register --control it)\n", options->sphere_targets,
+                (project->file.parent_path() / "control.csv").string().c_str());
+  }
   return 0;
 }
 

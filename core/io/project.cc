@@ -10,6 +10,7 @@
 
 #include "core/common/atomic_file.h"
 #include "core/geometry/transform.h"
+#include "core/io/project_georef.h"
 
 namespace scanreg::io {
 namespace {
@@ -311,6 +312,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       for (auto it = j["settings"].begin(); it != j["settings"].end(); ++it)
         project.settings[it.key()] = it->is_string() ? it->get<std::string>() : it->dump();
     }
+    if (Status s = GeorefFromJson(j, where, &project); !s) return s.error();
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, where + " is malformed: " + e.what());
   }
@@ -362,6 +364,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
          {"links", std::move(links)},
          {"settings", project.settings}};
   j["root"] = project.root ? json(*project.root) : json(nullptr);
+  GeorefToJson(project, &j);
   if (const Eigen::MatrixXi* confusion = project.CurrentConfusion()) {
     json rows = json::array();
     for (int i = 0; i < confusion->rows(); ++i) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/common/expected.h"
+#include "core/io/georef_records.h"
 
 namespace scanreg::io {
 
@@ -97,6 +98,10 @@ struct Project {
   // A digest of the file's bytes as last read or saved (0: none): SaveProject onto the same file
   // refuses when the file no longer has them — another run or an editor changed it meanwhile.
   std::uint64_t disk_digest = 0;
+  // Georeferencing (issue 15): survey control, the targets in the scans, the last adjustment.
+  std::vector<ControlPoint> control;
+  std::vector<TargetRecord> targets;
+  std::optional<GeorefRecord> georef;
 
   // Index of the scan with this name, or -1.
   int FindScan(const std::string& name) const;

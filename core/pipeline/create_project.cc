@@ -6,6 +6,7 @@
 
 #include "core/common/log.h"
 #include "core/common/output_set.h"
+#include "core/io/control_file.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
@@ -192,6 +193,12 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
     if (!poses) return poses.error();
     if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
   }
+  if (options.control) {
+    Expected<std::vector<io::ControlPoint>> control = io::ReadControlFile(*options.control);
+    if (!control) return control.error();
+    project.control = std::move(*control);
+  }
+  if (Status s = io::MarkCheckPoints(options.check_points, &project.control); !s) return s.error();
   if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return s.error();
   return CreatedProject{std::move(project), std::move(*scans), std::move(skipped)};
 }
@@ -228,6 +235,22 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   project.settings["simulated.size"] =
       std::to_string(options.scanner.cols) + "x" + std::to_string(options.scanner.rows);
   project.settings["simulated.noise_m"] = std::to_string(options.scanner.range_noise_m);
+  // The survey's control of the sphere targets (as a total station measured them), for
+  // `register --control`; not attached to the project, as a surveyor's own file would not be.
+  const std::vector<SimulatedTarget> targets = SimulatedTargets(options);
+  if (!targets.empty()) {
+    std::vector<io::ControlPoint> control;
+    for (const SimulatedTarget& t : targets) {
+      io::ControlPoint c;
+      c.name = t.name;
+      c.position = t.measured;
+      if (options.control_noise_m > 0) c.sigma_m = options.control_noise_m;
+      control.push_back(c);
+    }
+    const std::filesystem::path file = project_path.parent_path() / "control.csv";
+    written.Track(file);
+    if (Status s = io::WriteControlFile(file, control); !s) return written.Failed(s.error());
+  }
   written.Track(project_path);
   if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return written.Failed(s.error());
   written.Complete();

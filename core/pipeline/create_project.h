@@ -22,6 +22,9 @@ struct CreateProjectOptions {
   // the scans' imported poses (ProjectScan::imported_pose), `reference_poses` the reference.
   std::optional<std::filesystem::path> poses;
   std::optional<std::filesystem::path> reference_poses;
+  // Survey control points (io::ReadControlFile) and the names of those that are check points.
+  std::optional<std::filesystem::path> control;
+  std::vector<std::string> check_points;
   bool keep_scans = false;  // return the scans read (the GUI shows them); else only the project
   // Files that cannot be added (unreadable, a scan without points, already in the project) are left
   // out and listed in CreatedProject::skipped (the GUI); otherwise the first one is the error (the CLI).
@@ -59,7 +62,8 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
 
 // Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
 // header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose
-// reference poses are the true poses.
+// reference poses are the true poses; with sphere targets also `dir/control.csv` (their measured
+// control coordinates, for `register --control`).
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,
                                             ProgressSink& progress, const CancelToken& cancel);
 

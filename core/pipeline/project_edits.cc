@@ -211,6 +211,9 @@ Expected<std::vector<std::string>> RemoveScan(const std::string& scan, io::Proje
   for (io::ProjectScan& p : project.scans)
     if (p.parent_override == scan) p.parent_override.reset();
   if (project.root == scan) project.root.reset();
+  project.targets.erase(std::remove_if(project.targets.begin(), project.targets.end(),
+                                       [&](const io::TargetRecord& t) { return t.scan == scan; }),
+                        project.targets.end());
   return orphans;
 }
 
@@ -237,6 +240,8 @@ Status RenameScan(const std::string& scan, const std::string& new_name, io::Proj
   if (project.root == scan) project.root = new_name;
   for (std::string& n : project.confusion_scans)
     if (n == scan) n = new_name;
+  for (io::TargetRecord& t : project.targets)
+    if (t.scan == scan) t.scan = new_name;
   return Status::Ok();
 }
 

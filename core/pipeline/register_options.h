@@ -10,6 +10,8 @@
 #include "core/common/expected.h"
 #include "core/features/matching.h"
 #include "core/features/sift.h"
+#include "core/georef/georeference.h"
+#include "core/georef/sphere_targets.h"
 #include "core/registration/coarse.h"
 #include "core/registration/geometric_features.h"
 #include "core/registration/icp.h"
@@ -101,6 +103,10 @@ struct RegisterOptions {
   std::vector<std::string> only_scans;
   std::optional<std::string> root;          // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
+  // Georeferencing (issue 15), when the project has control points: the sphere targets sought in
+  // every registered scan and the adjustment onto control (core/pipeline/georeference_project.h).
+  georef::SphereTargetOptions spheres;
+  georef::GeorefOptions georef;
   Status Validate() const;
 };
 

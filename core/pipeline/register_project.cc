@@ -12,6 +12,7 @@
 #include "core/features/feature_cache.h"
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
+#include "core/pipeline/georeference_project.h"
 #include "core/pipeline/refine_project.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
@@ -326,6 +327,18 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
     }
     project.links = std::move(links);
     project.root = before.root ? before.root : project.root;
+  }
+  project.georef.reset();  // the poses moved: the last adjustment no longer describes them
+  if (!project.control.empty()) {
+    auto placed = GeoreferenceProject(project, scans, options, progress, cancel);
+    if (placed) {
+      result->georeferenced = true;
+    } else if (placed.error().code == ErrorCode::kCancelled) {
+      return placed.error();
+    } else {
+      result->georef_error = placed.error().message;
+      LogWarning(placed.error().message + "; the registration stays in the root scan's frame");
+    }
   }
   return result;
 }

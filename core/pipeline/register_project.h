@@ -46,6 +46,10 @@ struct ProjectRegistration {
     bool down_weighted = false;
   };
   std::vector<GlobalLink> global_links;
+  // Georeferencing (issue 15), run when the project has control points: whether it placed the
+  // project in the control frame, and why not. The residuals are in io::Project::georef.
+  bool georeferenced = false;
+  std::string georef_error;
   int features_from_cache = 0;
   double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
 };
@@ -92,7 +96,9 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
 void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
 
 // Registers the project's (already loaded) scans with the project's root, parent overrides and
-// rejected links, and writes the result into the project (not saved).
+// rejected links, and writes the result into the project (not saved). When the project has control
+// points it is then georeferenced (GeoreferenceProject); a georeferencing failure leaves the
+// registration in the root scan's frame and is reported in georef_error, not as an error.
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
                                                    const CancelToken& cancel);

@@ -72,6 +72,9 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.overlap_distance_m", "overlap-distance", "overlap distance (m; 0: from the data)", {}},
       {"register.global", "global", "global registration", {}, true},
       {"register.keep_imported", "keep-imported", "keep imported poses fixed", {}, true},
+      {"register.sphere_radius_m", "sphere-radius", "sphere target radius (m)", {}},
+      {"register.control_tolerance_m", "control-tolerance", "control residual tolerance (m)", {}},
+      {"register.levelled_deg", "levelled", "levelled scans: accuracy (°; 0: not levelled)", {}},
   };
   return all;
 }
@@ -86,6 +89,9 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
   if (key == "register.global") return o.global ? "true" : "false";
   if (key == "register.keep_imported") return o.keep_imported ? "true" : "false";
+  if (key == "register.sphere_radius_m") return Number(o.spheres.radius_m);
+  if (key == "register.control_tolerance_m") return Number(o.georef.tolerance_m);
+  if (key == "register.levelled_deg") return Number(o.georef.levelled_sigma_rad * 180.0 / M_PI);
   return "";
 }
 
@@ -115,6 +121,14 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
   if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
   if (key == "register.overlap_distance_m") return SetNumber(s, value, 0.0, 100.0, &o->overlap_distance_m);
+  if (key == "register.sphere_radius_m") return SetNumber(s, value, 0.005, 2.0, &o->spheres.radius_m);
+  if (key == "register.control_tolerance_m") return SetNumber(s, value, 0.0001, 10.0, &o->georef.tolerance_m);
+  if (key == "register.levelled_deg") {
+    double deg = 0;
+    if (Status st = SetNumber(s, value, 0.0, 5.0, &deg); !st) return st;
+    o->georef.levelled_sigma_rad = deg * M_PI / 180.0;
+    return Status::Ok();
+  }
   return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");
 }
 

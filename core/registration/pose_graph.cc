@@ -6,40 +6,10 @@
 #include <cmath>
 #include <string>
 
+#include "core/registration/link_residual.h"
+
 namespace scanreg {
 namespace {
-
-// Residual of one link: the measured parent_from_child against the poses' relative pose, as
-// (2 vec(q_err) / sigma_r, t_err / sigma_t), err = measured^-1 * (parent^-1 * child).
-struct LinkCost {
-  LinkCost(const Eigen::Isometry3d& measured, double sigma_t, double sigma_r)
-      : q_inv(Eigen::Quaterniond(measured.linear()).conjugate()),
-        t(measured.translation()),
-        sigma_t(sigma_t),
-        sigma_r(sigma_r) {}
-
-  template <typename T>
-  bool operator()(const T* qp_, const T* tp_, const T* qc_, const T* tc_, T* r) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> qp(qp_), qc(qc_);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> tp(tp_), tc(tc_);
-    const Eigen::Quaternion<T> qp_inv = qp.conjugate();
-    const Eigen::Quaternion<T> q_rel = qp_inv * qc;
-    const Eigen::Matrix<T, 3, 1> t_rel = qp_inv * (tc - tp);
-    const Eigen::Quaternion<T> qmi = q_inv.cast<T>();
-    const Eigen::Quaternion<T> q_err = qmi * q_rel;
-    const Eigen::Matrix<T, 3, 1> t_err = qmi * (t_rel - t.cast<T>());
-    const T sign = q_err.w() < T(0) ? T(-1) : T(1);
-    for (int k = 0; k < 3; ++k) {
-      r[k] = sign * T(2) * q_err.vec()[k] / T(sigma_r);
-      r[3 + k] = t_err[k] / T(sigma_t);
-    }
-    return true;
-  }
-
-  Eigen::Quaterniond q_inv;
-  Eigen::Vector3d t;
-  double sigma_t, sigma_r;
-};
 
 class CancelCallback : public ceres::IterationCallback {
  public:
@@ -107,8 +77,8 @@ Expected<PoseGraphResult> OptimizePoseGraph(const std::vector<Eigen::Isometry3d>
   }
   ceres::Problem problem;
   for (const PoseGraphLink& l : links) {
-    auto* cost = new ceres::AutoDiffCostFunction<LinkCost, 6, 4, 3, 4, 3>(
-        new LinkCost(l.parent_from_child, options.translation_sigma_m, options.rotation_sigma_rad));
+    auto* cost = new ceres::AutoDiffCostFunction<LinkResidual, 6, 4, 3, 4, 3>(
+        new LinkResidual(l.parent_from_child, options.translation_sigma_m, options.rotation_sigma_rad));
     ceres::LossFunction* loss = nullptr;
     if (options.kernel == PoseGraphOptions::Kernel::kCauchy) loss = new ceres::CauchyLoss(options.kernel_scale);
     if (options.kernel == PoseGraphOptions::Kernel::kHuber) loss = new ceres::HuberLoss(options.kernel_scale);
@@ -162,7 +132,7 @@ Expected<PoseGraphResult> OptimizePoseGraph(const std::vector<Eigen::Isometry3d>
     LinkError(l.parent_from_child, result.world_from_scan[l.parent], result.world_from_scan[l.child], &r.translation_after_m,
               &r.rotation_after_rad);
     // Kernel weight rho'(s) at the solution, s = squared normalised residual.
-    LinkCost cost(l.parent_from_child, options.translation_sigma_m, options.rotation_sigma_rad);
+    LinkResidual cost(l.parent_from_child, options.translation_sigma_m, options.rotation_sigma_rad);
     double res[6];
     cost(q[l.parent].coeffs().data(), t[l.parent].data(), q[l.child].coeffs().data(), t[l.child].data(), res);
     double s = 0;

@@ -18,6 +18,7 @@ SceneOptions ProjectScene(const SimulatedProjectOptions& o) {
   SceneOptions s = o.scene;
   s.street_length_m = std::max(s.street_length_m, SpanOf(o) + 60.0);
   s.far_site = s.far_site || o.add_far_station;
+  for (const SimulatedTarget& t : SimulatedTargets(o)) s.sphere_targets.push_back(t.world);
   return s;
 }
 
@@ -51,6 +52,14 @@ Status SimulatedProjectOptions::Validate() const {
     return MakeError(ErrorCode::kInvalidArgument, "project: traffic must be 0 to 500 vehicles and pedestrians per scan");
   if (!(traffic.reach_m > 0.0 && traffic.reach_m <= 500.0))
     return MakeError(ErrorCode::kInvalidArgument, "project: traffic reach must be in (0, 500] m");
+  if (sphere_targets < 0 || sphere_targets > 1000)
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: " + std::to_string(sphere_targets) + " sphere targets; use between 0 and 1000");
+  if (!(control_noise_m >= 0 && control_noise_m <= 1))
+    return MakeError(ErrorCode::kInvalidArgument, "project: control noise must be in [0, 1] m");
+  if (!control_from_world.matrix().allFinite() ||
+      !(control_from_world.linear().transpose() * control_from_world.linear()).isIdentity(1e-9))
+    return MakeError(ErrorCode::kInvalidArgument, "project: control_from_world must be finite and rigid");
   if (Status s = scanner.Validate(); !s) return s;
   return scene.Validate();
 }
@@ -70,6 +79,26 @@ std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptio
                                 o.max_tilt_deg * kDeg));
   }
   return poses;
+}
+
+std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& o) {
+  std::vector<SimulatedTarget> targets;
+  if (o.sphere_targets <= 0) return targets;
+  sim::Rng rng(sim::Hash(o.seed, 0x7a67));
+  // Along the stations (and a little beyond the ends), alternating sides on the road between the
+  // scanners' lane and the parked cars, at tripod heights.
+  const double span = SpanOf(o) + o.spacing_m, side_y = std::min(2.6, o.scene.street_half_width_m - 5.5);
+  for (int k = 0; k < o.sphere_targets; ++k) {
+    const double f = o.sphere_targets == 1 ? 0.5 : double(k) / (o.sphere_targets - 1);
+    SimulatedTarget t;
+    t.name = "T" + std::to_string(k + 1);
+    t.world = Eigen::Vector3d((f - 0.5) * span + rng.Uniform(-0.5, 0.5), (k % 2 == 0 ? 1 : -1) * side_y + rng.Uniform(-0.3, 0.3),
+                              rng.Uniform(1.2, 1.7));
+    t.control = o.control_from_world * t.world;
+    t.measured = t.control + o.control_noise_m * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    targets.push_back(t);
+  }
+  return targets;
 }
 
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
@@ -103,6 +132,7 @@ Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& optio
     Expected<Scan> scan = SimulateScan(traffic ? with_traffic : static_scene, poses[i], scanner, name, sub, cancel,
                                        moving_cells ? &moving : nullptr);
     if (!scan) return scan.error();
+    scan->reference_world_from_scan = options.control_from_world * poses[i];
     if (moving_cells) moving_cells->push_back(std::move(moving));
     scans.push_back(std::move(scan).value());
   }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -24,11 +25,29 @@ struct SimulatedProjectOptions {
   double max_tilt_deg = 0.5;  // degrees: random tilt of each station from upright
   bool add_far_station = false;  // one extra station at a separate site > 1 km away (no overlap)
   TrafficOptions traffic;        // moving vehicles and pedestrians, placed anew for each scan
+  // Survey sphere targets on tripods, spread along the stations on both sides of the street
+  // (scene.sphere_target_radius_m), named "T1", "T2", ... in order along +x.
+  int sphere_targets = 0;
+  double control_noise_m = 0.002;  // sigma per axis of the simulated control coordinates (total station / GNSS)
+  // Where the project sits in the survey's coordinate system (a national grid, UTM): the scans'
+  // reference poses and the targets' control coordinates are control_from_world times the scene's.
+  Eigen::Isometry3d control_from_world = Eigen::Isometry3d::Identity();
 
   Status Validate() const;
 };
 
+struct SimulatedTarget {
+  std::string name;
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();    // centre in the scene
+  Eigen::Vector3d control = Eigen::Vector3d::Zero();  // control_from_world * world
+  Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // control plus noise of control_noise_m per axis
+};
+
+// The sphere targets SimulateProject places (empty when options.sphere_targets is 0).
+std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& options);
+
 // Scans named "s01", "s02", ... in station order along +x; the far station, if any, comes last.
+// Reference poses are control_from_world * the true station poses.
 // moving_cells, when given, receives per scan the cells that returned from moving objects.
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel,

@@ -78,6 +78,18 @@ int Scene::AddCylinder(const Eigen::Vector2d& center_xy, double radius, double z
   return static_cast<int>(prims_.size()) - 1;
 }
 
+int Scene::AddSphere(const Eigen::Vector3d& center, double radius, int texture) {
+  Primitive p;
+  p.kind = Kind::kSphere;
+  p.center = center;
+  p.axes.setIdentity();
+  p.half = Eigen::Vector3d(radius, 0.0, 0.0);
+  p.texture.fill(texture);
+  p.bounds = Eigen::AlignedBox3d(center.array() - radius, center.array() + radius);
+  prims_.push_back(p);
+  return static_cast<int>(prims_.size()) - 1;
+}
+
 bool Scene::HitPrimitive(int index, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t_best, int* face,
                          Eigen::Vector2d* uv, Eigen::Vector3d* normal) const {
   const Primitive& p = prims_[index];
@@ -167,6 +179,22 @@ bool Scene::HitPrimitive(int index, const Eigen::Vector3d& o, const Eigen::Vecto
         }
       }
       return hit;
+    }
+    case Kind::kSphere: {
+      const double r = p.half.x();
+      const Eigen::Vector3d oc = o - p.center;
+      const double b = oc.dot(d), c = oc.squaredNorm() - r * r;
+      if (c <= 0.0) return false;  // origin inside
+      const double disc = b * b - c;
+      if (disc < 0.0) return false;
+      const double t = -b - std::sqrt(disc);
+      if (t <= kEps || t >= *t_best) return false;
+      const Eigen::Vector3d n = (oc + t * d) / r;
+      *t_best = t;
+      *face = 0;
+      *uv = Eigen::Vector2d(std::atan2(n.y(), n.x()) * r, n.z() * r);
+      *normal = n;
+      return true;
     }
   }
   return false;

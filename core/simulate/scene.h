@@ -1,5 +1,6 @@
 // Synthetic scenes of analytic primitives for the TLS simulator: rectangles (ground, walls),
-// oriented boxes (buildings, cars, kiosks), vertical cylinders (poles, trunks, bins). Each surface
+// oriented boxes (buildings, cars, kiosks), vertical cylinders (poles, trunks, bins), spheres
+// (survey targets). Each surface
 // carries an albedo texture of its surface coordinates. World frame: z up, metres; the street of
 // MakeScene runs along x with its centre line on y = 0 and the ground at z = 0.
 #pragma once
@@ -38,6 +39,9 @@ class Scene {
   // Vertical cylinder with a top cap. Texture coordinates: (arc length, height above z_min).
   int AddCylinder(const Eigen::Vector2d& center_xy, double radius, double z_min, double z_max, int texture);
 
+  // Sphere (survey targets). Texture coordinates: (arc length about z, height above the centre).
+  int AddSphere(const Eigen::Vector3d& center, double radius, int texture);
+
   // Builds the bounding-volume hierarchy; call after the last Add* and before Intersect.
   void Build();
 
@@ -55,12 +59,12 @@ class Scene {
   const Eigen::AlignedBox3d& primitive_bounds(int i) const { return prims_[i].bounds; }
 
  private:
-  enum class Kind : std::uint8_t { kRectangle, kBox, kCylinder };
+  enum class Kind : std::uint8_t { kRectangle, kBox, kCylinder, kSphere };
   struct Primitive {
     Kind kind;
     Eigen::Vector3d center;
     Eigen::Matrix3d axes;       // rectangle: columns u, v, n; box: rotation (box -> world)
-    Eigen::Vector3d half;       // rectangle: (hu, hv, 0); box: half extents; cylinder: (r, z_min, z_max)
+    Eigen::Vector3d half;       // rectangle: (hu, hv, 0); box: half extents; cylinder: (r, z_min, z_max); sphere: (r, 0, 0)
     std::array<int, 6> texture;
     Eigen::AlignedBox3d bounds;
   };
@@ -95,6 +99,9 @@ struct SceneOptions {
   double street_length_m = 100.0;  // length of the built-up street along x, centred on x = 0
   double street_half_width_m = 9.0;  // distance from the centre line to the nearest façades
   bool far_site = false;  // also build a separate cluster of buildings around FarSiteCenter()
+  // Survey sphere targets (white, on a thin tripod pole down to the ground): their centres.
+  std::vector<Eigen::Vector3d> sphere_targets;
+  double sphere_target_radius_m = 0.0725;  // 145 mm spheres, a common size
 
   Status Validate() const;
 };

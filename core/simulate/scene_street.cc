@@ -284,6 +284,11 @@ Status SceneOptions::Validate() const {
   if (!(street_half_width_m >= 6.0 && street_half_width_m <= 50.0))
     return MakeError(ErrorCode::kInvalidArgument, "scene street half-width " + std::to_string(street_half_width_m) +
                                                       " m is outside [6, 50] m");
+  if (!sphere_targets.empty() && !(sphere_target_radius_m >= 0.01 && sphere_target_radius_m <= 1.0))
+    return MakeError(ErrorCode::kInvalidArgument, "scene: sphere target radius " +
+                                                      std::to_string(sphere_target_radius_m) + " m is outside [0.01, 1] m");
+  for (const Vec3& c : sphere_targets)
+    if (!c.allFinite()) return MakeError(ErrorCode::kInvalidArgument, "scene: a sphere target centre is not finite");
   return Status::Ok();
 }
 
@@ -301,6 +306,14 @@ Scene MakeScene(const SceneOptions& options) {
   StreetBuildings(o, b);
   StreetFurniture(o, b);  // real streets always hold some unique objects, even between identical façades
   if (o.far_site) FarSite(b);
+  if (!o.sphere_targets.empty()) {
+    const int white = scene.AddTexture(SurfaceTexture::Uniform(0.85f)), pole = scene.AddTexture(SurfaceTexture::Uniform(0.3f));
+    const double r = o.sphere_target_radius_m;
+    for (const Vec3& c : o.sphere_targets) {
+      scene.AddSphere(c, r, white);
+      if (c.z() - r > 0.05) scene.AddCylinder({c.x(), c.y()}, std::min(0.012, 0.3 * r), 0.0, c.z() - 0.9 * r, pole);
+    }
+  }
   scene.Build();
   return scene;
 }
