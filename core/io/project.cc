@@ -10,6 +10,7 @@
 
 #include "core/common/atomic_file.h"
 #include "core/geometry/transform.h"
+#include "core/io/json_fields.h"
 #include "core/io/project_georef.h"
 
 namespace scanreg::io {
@@ -86,17 +87,15 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
     l.method = j.value("method", "");
     l.status = LinkStatusFromName(j.value("status", "failed"));
     l.reason = j.value("reason", "");
-    l.matches = j.value("matches", 0);
-    l.reliable = j.value("reliable", 0);
-    l.ransac_inliers = j.value("ransac_inliers", 0);
-    l.geometric_matches = j.value("geometric_matches", 0);
-    l.geometric_inliers = j.value("geometric_inliers", 0);
-    l.consistent = j.value("consistent", 0);
+    for (const auto& [key, field] : {std::pair{"matches", &l.matches}, {"reliable", &l.reliable},
+                                     {"ransac_inliers", &l.ransac_inliers}, {"geometric_matches", &l.geometric_matches},
+                                     {"geometric_inliers", &l.geometric_inliers}, {"consistent", &l.consistent},
+                                     {"iterations", &l.iterations}})
+      if (Status s = ReadCount(j, key, 2'000'000'000, where, field); !s) return s.error();
     l.rms_m = j.value("rms_m", 0.0);
     l.overlap = j.value("overlap", 0.0);
     l.conflict = j.value("conflict", 0.0);
     l.moving = j.value("moving", 0.0);
-    l.iterations = j.value("iterations", 0);
     l.seconds = j.value("seconds", 0.0);
     l.loop_check = j.value("loop_check", false);
     l.user_accepted = j.value("user_accepted", false);
@@ -252,7 +251,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       if (scan.path.is_relative()) scan.path = (base / scan.path).lexically_normal();
       // A missing scan file is not an error here: the project can still be read, and relinked
       // (pipeline::MissingScanFiles); loading the scans' points names it.
-      scan.index_in_file = s.value("index_in_file", 0);
+      if (Status st = ReadCount(s, "index_in_file", 1'000'000, label, &scan.index_in_file); !st) return st.error();
       scan.registered = s.value("registered", false);
       if (s.contains("world_from_scan")) {
         auto t = PoseFromJson(s["world_from_scan"], label + " world_from_scan");

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <set>
 
+#include "core/io/json_fields.h"
+
 namespace scanreg::io {
 namespace {
 
@@ -105,7 +107,7 @@ Status GeorefFromJson(const json& j, const std::string& where, Project* project)
       r.center = *c;
       r.sigma_m = t.value("sigma_m", 0.001);
       r.rms_m = t.value("rms_m", 0.0);
-      r.points = t.value("points", 0);
+      if (Status s = ReadCount(t, "points", 2'000'000'000, what, &r.points); !s) return s;
       r.residual_m = t.value("residual_m", -1.0);
       for (double v : {r.sigma_m, r.rms_m, r.residual_m})
         if (Status s = Finite(v, what + " sigma, rms or residual"); !s) return s;
@@ -117,8 +119,8 @@ Status GeorefFromJson(const json& j, const std::string& where, Project* project)
     const json& g = j.at("georef");
     GeorefRecord r;
     r.rms_m = g.value("rms_m", 0.0);
-    r.used = g.value("used", 0);
-    r.targets = g.value("targets", 0);
+    for (const auto& [key, field] : {std::pair{"used", &r.used}, {"targets", &r.targets}})
+      if (Status s = ReadCount(g, key, 1'000'000, where + ", georef", field); !s) return s;
     r.tolerance_m = g.value("tolerance_m", 0.0);
     for (const json& c : g.value("control", json::array())) {
       ControlResidualRecord row;
@@ -128,7 +130,9 @@ Status GeorefFromJson(const json& j, const std::string& where, Project* project)
       if (!d) return d.error();
       row.delta = *d;
       row.leave_one_out_m = c.value("leave_one_out_m", -1.0);
-      row.observations = c.value("observations", 0);
+      if (Status s = ReadCount(c, "observations", 1'000'000, where + ", georef residual of '" + row.name + "'",
+                               &row.observations); !s)
+        return s;
       r.control.push_back(std::move(row));
     }
     project->georef = std::move(r);

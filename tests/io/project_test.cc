@@ -111,6 +111,25 @@ TEST(ProjectTest, ARootOrALinkThatNamesNoScanIsAClearError) {
   EXPECT_NE(r.error().message.find("'ghost' is not a scan"), std::string::npos) << r.error().message;
 }
 
+// A whole number out of range was wrapped by the JSON library (2^40 read as scan 0 of the file).
+TEST(ProjectTest, ACountOutOfRangeIsAClearError) {
+  test::TempDir dir;
+  Project p = TwoScanProject(dir);
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  std::ifstream in(dir / "p.scanreg.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string field = "\"index_in_file\": 0";
+  ASSERT_NE(text.find(field), std::string::npos) << text.substr(0, 400);
+  for (const std::string bad : {"1099511627776", "-1", "1.5", "\"0\""}) {
+    std::string changed = text;
+    changed.replace(changed.find(field), field.size(), "\"index_in_file\": " + bad);
+    std::ofstream(dir / "q.scanreg.json") << changed;
+    Expected<Project> q = LoadProject(dir / "q.scanreg.json");
+    ASSERT_FALSE(q.ok()) << bad;
+    EXPECT_NE(q.error().message.find("index_in_file"), std::string::npos) << q.error().message;
+  }
+}
+
 TEST(ProjectTest, UnknownSchemaVersionAndGarbageAreClearErrors) {
   test::TempDir dir;
   std::ofstream(dir / "future.scanreg.json") << R"({"schema_version": 99, "scans": []})";

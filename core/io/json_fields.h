@@ -1,0 +1,26 @@
+// Checked reading of the project file's whole-number fields: nlohmann's get<int>() wraps a value
+// like 2^40 to 0 silently, which made a project naming scan 1099511627776 of a file read scan 0.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/common/expected.h"
+
+namespace scanreg::io {
+
+// j[key], when present, into *out: a whole number from 0 to max; else an error naming `what` and key.
+inline Status ReadCount(const nlohmann::json& j, const char* key, long long max, const std::string& what, int* out) {
+  if (!j.is_object() || !j.contains(key)) return Status::Ok();
+  const nlohmann::json& v = j[key];
+  const bool ok = v.is_number_integer() && !(v.is_number_unsigned() && v.get<unsigned long long>() > 1ull << 62) &&
+                  v.get<long long>() >= 0 && v.get<long long>() <= max;
+  if (!ok) {
+    return MakeError(ErrorCode::kParseError,
+                     what + ": '" + key + "' must be a whole number from 0 to " + std::to_string(max));
+  }
+  *out = static_cast<int>(v.get<long long>());
+  return Status::Ok();
+}
+
+}  // namespace scanreg::io
