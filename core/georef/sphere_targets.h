@@ -19,7 +19,7 @@ namespace scanreg::georef {
 struct SphereTargetOptions {
   double radius_m = 0.0725;  // the spheres' radius (145 mm spheres are common)
   double max_range_m = 60.0;
-  int min_points = 20;         // fitted points at least
+  int min_points = 12;         // fitted points at least
   double min_coverage = 0.4;   // fitted points / the cells a sphere shows at its range
   double min_cap_deg = 45.0;   // angle from the line of sight the fitted points reach
   double max_rms_fraction = 0.05;  // fit RMS at most this fraction of the radius

@@ -12,6 +12,7 @@
 #include "core/pipeline/register_project.h"
 #include "core/report/canvas.h"
 #include "core/report/confusion_image.h"
+#include "core/report/control_section.h"
 #include "core/report/error_chart.h"
 #include "core/report/html_table.h"
 #include "core/report/network_image.h"
@@ -272,7 +273,7 @@ Expected<std::filesystem::path> WriteReport(const io::Project& project, const st
         html += NetworkSection(project, dir, &status);
         break;
       case 2:
-        html += LinksSection(project) + PosesSection(project);
+        html += LinksSection(project) + PosesSection(project) + ControlSection(project);
         break;
       default:
         html += ErrorsSection(project, dir, &status);

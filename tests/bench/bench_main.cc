@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
       {"register", scanreg::bench::RunRegisterBench}, {"merge", scanreg::bench::RunMergeBench},
       {"export", scanreg::bench::RunExportBench},
       {"em", scanreg::bench::RunEmBench}, {"global", scanreg::bench::RunGlobalBench},
-      {"geometric", scanreg::bench::RunGeometricBench}, {"hard", scanreg::bench::RunHardBench}};
+      {"geometric", scanreg::bench::RunGeometricBench}, {"hard", scanreg::bench::RunHardBench},
+      {"georef", scanreg::bench::RunGeorefBench}};
   bool quick = false;
   std::vector<std::string> chosen;
   for (int i = 1; i < argc; ++i) {
@@ -50,7 +51,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
       chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard ...]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef ...]\n");
       return 2;
     }
   }

@@ -45,5 +45,6 @@ void RunEmBench(Table& table, bool quick);
 void RunGlobalBench(Table& table, bool quick);
 void RunGeometricBench(Table& table, bool quick);
 void RunHardBench(Table& table, bool quick);
+void RunGeorefBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench

@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "core/io/control_file.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
+#include "core/report/report.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg::pipeline {
@@ -133,6 +136,18 @@ TEST_F(GeoreferenceProjectTest, AControlPointFiveCentimetresOffIsFlaggedNotSprea
     EXPECT_LE(p.georef->control[k].delta.norm(), 0.003) << p.georef->control[k].name;
   }
   ExpectScansOnTheTruth(p, 0.005, 0.01);
+  // The report's control table shows the blunder in red (class "failed") with its role.
+  auto page = report::WriteReport(p, dir_->path() / "report", progress, cancel);
+  ASSERT_TRUE(page.ok()) << page.error().message;
+  std::ifstream in(*page);
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t table = html.find("id=\"control-table\"");
+  ASSERT_NE(table, std::string::npos);
+  const std::size_t row = html.find("<td>" + p.control[1].name + "</td>", table);
+  ASSERT_NE(row, std::string::npos);
+  const std::size_t tr = html.rfind("<tr", row);
+  EXPECT_NE(html.substr(tr, row - tr).find("failed"), std::string::npos) << html.substr(tr, 200);
+  EXPECT_NE(html.find("blunder", row), std::string::npos);
 
   p = done_->project;
   p.control.resize(2);
