@@ -424,9 +424,12 @@ def area_overwrite(ctx, area):
         ctx.end()
 
 
-def after_abuse(ctx, d, scans_before, label):
-    """The project must load (the next run) and that run must leave no .tmp- files."""
+def after_abuse(ctx, d, scans_before, label, rerun=None):
+    """The project must load (the next run) and leave no .tmp- files. rerun: the killed command,
+    run again to completion first (a temporary in an output folder goes at the next write there)."""
     P = os.path.join(d, "project.scanreg.json")
+    if rerun:
+        ctx.check(ctx.run(*rerun))
     res = ctx.run("info", P)
     ctx.check(res)
     if res.rc != 0:
@@ -453,7 +456,7 @@ def area_kill(ctx, area):
         before = sha_tree(d)
         res = ctx.start(*args).wait(kill_after=delay)
         ctx.check(res)
-        after_abuse(ctx, d, before, f"{ctx.show(args)} (kill -9 after {delay:.2f} s)")
+        after_abuse(ctx, d, before, f"{ctx.show(args)} (kill -9 after {delay:.2f} s)", rerun=args)
         ctx.end()
 
 
