@@ -33,6 +33,7 @@
 #include "core/pipeline/register_settings.h"
 #include "core/report/report.h"
 #include "ui/app_settings.h"
+#include "ui/control_panel.h"
 #include "ui/job_runner.h"
 #include "ui/merge_panel.h"
 #include "ui/network_panel.h"
@@ -172,6 +173,7 @@ void MainWindow::CreateDocks() {
   confusion_panel_ = new ConfusionPanel(this);
   network_ = new NetworkPanel(this);
   log_ = new LogPanel(this);
+  control_panel_ = new ControlPanel(this);
   merge_panel_ = new MergePanel(this, scene_);
   connect(scan_list_, &ScanListPanel::ScanVisibilityChanged, scene_, &ScanScene::SetScanVisible);
   connect(network_, &NetworkPanel::ParentOverrideRequested, this, &MainWindow::SetParentOverride);
@@ -180,6 +182,7 @@ void MainWindow::CreateDocks() {
                                                 {network_, tr("Scan network")},
                                                 {confusion_panel_, tr("Confusion matrix")},
                                                 {merge_panel_, tr("Merge")},
+                                                {control_panel_, tr("Control")},
                                                 {log_, tr("Log")}};
   QDockWidget* first_right = nullptr;
   for (const auto& [widget, title] : docks) {
@@ -187,7 +190,7 @@ void MainWindow::CreateDocks() {
     dock->setObjectName(widget->objectName() + "Dock");
     dock->setWidget(widget == merge_panel_ ? Scrollable(widget) : widget);
     addDockWidget(widget == log_ ? Qt::BottomDockWidgetArea : Qt::RightDockWidgetArea, dock);
-    if (widget == merge_panel_) tabifyDockWidget(first_right, dock);  // a tab beside the scan list
+    if (widget == merge_panel_ || widget == control_panel_) tabifyDockWidget(first_right, dock);  // tabs beside the scan list
     if (!first_right && widget != log_) first_right = dock;
   }
   first_right->raise();
@@ -234,6 +237,14 @@ void MainWindow::CreateMenus() {
     RememberDir(files.first());
     AddScans(files);
   });
+  QAction* control = file->addAction(tr("Import &control points…"), this, [this] {
+    const QString path = QFileDialog::getOpenFileName(this, tr("Import control points"), LastDir(),
+                                                      tr("Control points (*.csv *.txt);;All files (*)"));
+    if (path.isEmpty()) return;
+    RememberDir(path);
+    ImportControl(path);
+  });
+  control->setObjectName("ImportControlAction");
   QAction* save = file->addAction(tr("&Save project"), this, [this] {
     if (project().file.empty()) {
       SaveProjectAs();
@@ -520,6 +531,7 @@ void MainWindow::Refresh() {
   }
   confusion_panel_->Show(ordered, names);
   network_->Show(p);
+  control_panel_->Show(p);
   bool any_registered = false;
   for (const io::ProjectScan& s : p.scans) any_registered |= s.registered;
   // Before registration, show the scans as they stand (each at its current pose).

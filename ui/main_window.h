@@ -34,6 +34,7 @@ class RegisterSettingsDialog;
 class NetworkPanel;
 class PairInspector;
 class ScanListPanel;
+class ControlPanel;
 class ScanScene;
 class View3d;
 
@@ -75,6 +76,10 @@ class MainWindow : public QMainWindow {
   bool RemoveScan(const QString& scan);
   bool RenameScan(const QString& scan, const QString& new_name);
   bool SetRoot(const QString& scan);
+  // File → Import control points… (issue 15): the file's points replace the project's control, as
+  // an undoable edit; the next registration places the project on them. False, with a dialog
+  // naming the file and line, when it cannot be read.
+  bool ImportControl(const QString& path);
   // Points the scan at another file (read on the worker; refused when it holds another grid).
   bool RelinkScan(const QString& scan, const QString& file);
   // Writes the registration report (dir/index.html and its pictures) on the worker.
@@ -165,6 +170,7 @@ class MainWindow : public QMainWindow {
   JobRunner* jobs_ = nullptr;
   View3d* view3d_ = nullptr;
   ScanListPanel* scan_list_ = nullptr;
+  ControlPanel* control_panel_ = nullptr;
   ConfusionPanel* confusion_panel_ = nullptr;
   LogPanel* log_ = nullptr;
   NetworkPanel* network_ = nullptr;

@@ -5,6 +5,7 @@
 #include <QStatusBar>
 
 #include "core/common/log.h"
+#include "core/io/control_file.h"
 #include "core/io/project_tree.h"
 #include "core/pipeline/manual_alignment.h"
 #include "core/pipeline/project_edits.h"
@@ -13,6 +14,8 @@
 #include "core/pipeline/register_project.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+
+#include "core/io/control_file.h"
 #include "ui/pick_points_dialog.h"
 #include "ui/pose_dialog.h"
 #include "ui/project_document.h"
@@ -264,6 +267,22 @@ bool MainWindow::RenameScan(const QString& scan, const QString& new_name) {
     return false;
   }
   doc_->Edit(tr("rename %1 to %2").arg(scan, new_name.trimmed()), std::move(after));
+  return true;
+}
+
+bool MainWindow::ImportControl(const QString& path) {
+  auto control = io::ReadControlFile(path.toStdString());
+  if (!control) {
+    ShowError(tr("Import control points"), QString::fromStdString(control.error().message));
+    return false;
+  }
+  io::Project after = project();
+  after.control = std::move(*control);
+  after.georef.reset();  // the residuals were against other control
+  const int n = static_cast<int>(after.control.size());
+  doc_->Edit(tr("import %1 control points").arg(n), std::move(after));
+  statusBar()->showMessage(tr("%1 control points imported: register (Ctrl+R) to place the project on them").arg(n),
+                           12000);
   return true;
 }
 
