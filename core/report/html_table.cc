@@ -34,7 +34,10 @@ std::string Escape(std::string_view text) {
 std::string Fixed(double value, int decimals) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
-  return buf;
+  std::string text = buf;
+  // "-0.0": a tiny negative residual reads as a sign that is not there.
+  if (text[0] == '-' && text.find_first_not_of("-0.") == std::string::npos) text.erase(0, 1);
+  return text;
 }
 
 HtmlTable::HtmlTable(std::string id, std::vector<std::string> header)

@@ -16,6 +16,7 @@
 #include "core/pipeline/project_edits.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
+#include "core/report/html_table.h"
 #include "tests/io/io_test_util.h"
 #include "tests/support/test_paths.h"
 
@@ -201,6 +202,14 @@ TEST(Report, AScanPlacedByHandIsMarkedAsHavingNoLinkEvidence) {
   EXPECT_EQ(poses[0][1], "root");
   EXPECT_EQ(poses[1][1], "placed by hand (no link evidence)");
   EXPECT_NE(poses[2][1].find("not registered"), std::string::npos);
+}
+
+TEST(Report, FixedNumbersNeverShowANegativeZero) {
+  EXPECT_EQ(Fixed(-0.00002, 1), "0.0");
+  EXPECT_EQ(Fixed(-0.04, 1), "0.0");
+  EXPECT_EQ(Fixed(-0.06, 1), "-0.1");
+  EXPECT_EQ(Fixed(2.345, 2), "2.35");
+  EXPECT_EQ(Fixed(-3.0, 0), "-3");
 }
 
 TEST(Report, AFileOrAnUnwritablePlaceIsAClearError) {
