@@ -119,6 +119,38 @@ vtkSmartPointer<vtkActor> MakeMarkerActor(const Eigen::Vector3d& centre, const d
   return actor;
 }
 
+// The targets seen in the registered scans (issue 15), where their scan's pose puts them: white
+// round points drawn at a fixed screen size so that a 145 mm sphere shows at street scale; red when
+// the observation's residual after the adjustment exceeds 1 cm.
+vtkSmartPointer<vtkActor> MakeTargetsActor(const io::Project& project, const Eigen::Vector3d& origin) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colours->SetNumberOfComponents(3);
+  for (const io::TargetRecord& t : project.targets) {
+    const int s = project.FindScan(t.scan);
+    if (s < 0 || !project.scans[s].registered) continue;
+    const Eigen::Vector3d p = project.scans[s].world_from_scan * t.center - origin;
+    const vtkIdType id = points->InsertNextPoint(p.data());
+    cells->InsertNextCell(1, &id);
+    const bool off = t.residual_m > 0.01;
+    const unsigned char rgb[3] = {255, static_cast<unsigned char>(off ? 60 : 255), static_cast<unsigned char>(off ? 60 : 255)};
+    colours->InsertNextTypedTuple(rgb);
+  }
+  if (points->GetNumberOfPoints() == 0) return nullptr;
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(cells);
+  poly->GetPointData()->SetScalars(colours);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(poly);
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetPointSize(12);
+  actor->GetProperty()->SetRenderPointsAsSpheres(true);
+  return actor;
+}
+
 // Links of the tree (ok: green, weak: orange), between scanner positions.
 vtkSmartPointer<vtkActor> MakeLinksActor(const io::Project& project, const Eigen::Vector3d& origin) {
   auto points = vtkSmartPointer<vtkPoints>::New();
@@ -170,6 +202,7 @@ std::vector<vtkSmartPointer<vtkActor>> ScanActors::All() const {
     for (const auto& a : *group)
       if (a) all.push_back(a);
   if (links) all.push_back(links);
+  if (targets) all.push_back(targets);
   return all;
 }
 
@@ -194,6 +227,7 @@ ScanActors MakeScanActors(const std::vector<Scan>& scans, const io::Project& pro
     actors.markers[i] = MakeMarkerActor(pose.translation() - origin, rgb);
   }
   actors.links = MakeLinksActor(project, origin);
+  actors.targets = MakeTargetsActor(project, origin);
   return actors;
 }
 

@@ -1,5 +1,5 @@
 // Converts registered scans into VTK actors for the 3D view: one point cloud per scan, coloured
-// per scan or by reflectance, the scanner positions and the links of the scan tree.
+// per scan or by reflectance, the scanner positions, the links of the scan tree and the targets.
 // Level of detail: a cloud is decimated to at most `max_points_per_scan` points (0 = every valid
 // point); full-resolution clouds are level-of-detail actors that draw a subset while the camera
 // moves, so a project of millions of points stays interactive.
@@ -24,6 +24,7 @@ struct ScanActors {
   std::vector<vtkSmartPointer<vtkActor>> clouds;       // per project scan; null when the scan is not drawn
   std::vector<vtkSmartPointer<vtkActor>> markers;      // scanner positions, per project scan (or null)
   vtkSmartPointer<vtkActor> links;                     // the tree's links; null without links
+  vtkSmartPointer<vtkActor> targets;                   // targets seen in registered scans (issue 15); null without
   std::vector<vtkSmartPointer<vtkActor>> All() const;  // the non-null actors
 };
 

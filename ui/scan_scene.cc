@@ -18,7 +18,9 @@ namespace {
 // Whether the drawing of `b` would be that of `a` (with the same points): the same scans, poses,
 // registered flags and drawn links.
 bool SameDrawing(const io::Project& a, const io::Project& b) {
-  if (a.file != b.file || a.scans.size() != b.scans.size() || a.links.size() != b.links.size()) return false;
+  if (a.file != b.file || a.scans.size() != b.scans.size() || a.links.size() != b.links.size() ||
+      a.targets.size() != b.targets.size())
+    return false;
   for (std::size_t i = 0; i < a.scans.size(); ++i) {
     const io::ProjectScan &x = a.scans[i], &y = b.scans[i];
     if (x.name != y.name || x.registered != y.registered || x.world_from_scan.matrix() != y.world_from_scan.matrix())
@@ -143,6 +145,7 @@ void ScanScene::SetVisibilities() {
       if ((*group)[i]) (*group)[i]->SetVisibility(visible);
   }
   if (actors_.links) actors_.links->SetVisibility(show_scans_);
+  if (actors_.targets) actors_.targets->SetVisibility(show_scans_);
   if (mesh_actor_) mesh_actor_->SetVisibility(show_mesh_);
 }
 

@@ -11,8 +11,13 @@
 #include "core/io/project.h"
 #include "core/pipeline/create_project.h"
 #include "tests/ui/wait_for_job.h"
+#include <vtkActor.h>
+#include <vtkMapper.h>
+#include <vtkPolyData.h>
+
 #include "ui/control_panel.h"
 #include "ui/main_window.h"
+#include "ui/scan_cloud_actors.h"
 
 using scanreg::test::WaitForJob;
 using scanreg::ui::MainWindow;
@@ -56,6 +61,15 @@ class ControlPanelTest : public QObject {
       g.control.push_back(r);
     }
     p.georef = g;
+    // Two target observations of the first scan, one far off after the adjustment.
+    for (int k = 0; k < 2; ++k) {
+      scanreg::io::TargetRecord t;
+      t.scan = p.scans[0].name;
+      t.name = p.control[k].name;
+      t.center = Eigen::Vector3d(3.0 + k, -1.0, 0.2);
+      t.residual_m = k == 0 ? 0.001 : 0.05;
+      p.targets.push_back(t);
+    }
     QVERIFY(scanreg::io::SaveProject(p, p.file).ok());
 
     MainWindow window;
@@ -72,6 +86,21 @@ class ControlPanelTest : public QObject {
     QCOMPARE(table->item(0, 8)->text(), QString("green"));
     QCOMPARE(table->item(3, 8)->text(), QString("orange"));
     QVERIFY(table->item(2, 0)->background().color() != table->item(0, 0)->background().color());
+
+    // The 3D view draws the targets where their scan's pose puts them (relative to the scene origin).
+    scanreg::io::Project drawn = window.project();
+    for (auto& s : drawn.scans) s.registered = true;
+    const scanreg::ui::ScanActors actors =
+        scanreg::ui::MakeScanActors(window.scans(), drawn, scanreg::ui::CloudColouring::kPerScan, 1000);
+    QVERIFY(actors.targets != nullptr);
+    auto* poly = vtkPolyData::SafeDownCast(actors.targets->GetMapper()->GetInput());
+    QVERIFY(poly != nullptr);
+    QCOMPARE(static_cast<int>(poly->GetNumberOfPoints()), 2);
+    const Eigen::Vector3d expect = drawn.scans[0].world_from_scan * Eigen::Vector3d(4.0, -1.0, 0.2) -
+                                   scanreg::ui::SceneOrigin(drawn);
+    double at[3];
+    poly->GetPoint(1, at);
+    QVERIFY((Eigen::Vector3d(at[0], at[1], at[2]) - expect).norm() < 1e-4);
 
     // A bad control file: a dialog naming the file and line; nothing changes.
     const QString bad = dir.filePath("bad.csv");
