@@ -56,11 +56,13 @@ struct LevelCost {
   double s;
 };
 
-// A weak pull of a scan to where the registration put it (metre / 0.1 rad): keeps scans that no
-// link or target constrains (a hand-placed or imported pose) where the user left them, relative to
-// the rest; negligible against links and targets.
+// A pull of a scan to where the registration put it (moved with the datum). Weak (metre / 0.1 rad)
+// for every scan: keeps one that no link or target constrains where it was relative to the rest,
+// negligible against links and targets. Stiff (0.1 mm / 1e-6 rad) for a held scan (a hand
+// placement): it stays as placed.
 struct PriorCost {
-  PriorCost(const Eigen::Isometry3d& pose) : q_inv(Eigen::Quaterniond(pose.linear()).conjugate()), t(pose.translation()) {}
+  PriorCost(const Eigen::Isometry3d& pose, double sigma_t, double sigma_r)
+      : q_inv(Eigen::Quaterniond(pose.linear()).conjugate()), t(pose.translation()), st(sigma_t), sr(sigma_r) {}
   template <typename T>
   bool operator()(const T* q_, const T* t_, T* r) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q(q_);
@@ -68,13 +70,14 @@ struct PriorCost {
     const Eigen::Quaternion<T> e = q_inv.cast<T>() * q;
     const T sign = e.w() < T(0) ? T(-1) : T(1);
     for (int k = 0; k < 3; ++k) {
-      r[k] = sign * T(2) * e.vec()[k] / T(0.1);
-      r[3 + k] = (tt[k] - T(t[k])) / T(1.0);
+      r[k] = sign * T(2) * e.vec()[k] / T(sr);
+      r[3 + k] = (tt[k] - T(t[k])) / T(st);
     }
     return true;
   }
   Eigen::Quaterniond q_inv;
   Eigen::Vector3d t;
+  double st, sr;
 };
 
 struct Target {
@@ -228,6 +231,7 @@ struct Adjustment {
   const std::vector<io::ControlPoint>* control = nullptr;
   const GeorefOptions* options = nullptr;
   std::vector<Eigen::Isometry3d> start;   // scan poses, local frame
+  std::vector<bool> held;                 // scans kept as placed
   std::vector<Eigen::Vector3d> start_x;   // target positions, local frame
   std::vector<int> target_of_obs;         // observation -> target
   std::vector<int> target_of_control;     // control point -> target (-1: none)
@@ -253,7 +257,10 @@ struct Adjustment {
     const GeorefOptions& o = *options;
     ceres::Problem problem;
     for (int i = 0; i < n; ++i) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(new PriorCost(start[i])), nullptr,
+      const bool stiff = i < static_cast<int>(held.size()) && held[i];
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorCost, 6, 4, 3>(
+                                   new PriorCost(start[i], stiff ? 1e-4 : 1.0, stiff ? 1e-6 : 0.1)),
+                               nullptr,
                                s.q[i].coeffs().data(), s.t[i].data());
       problem.SetManifold(s.q[i].coeffs().data(), new ceres::EigenQuaternionManifold);
       if (o.levelled_sigma_rad > 0) {
@@ -359,7 +366,7 @@ Status GeorefOptions::Validate() const {
 Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& poses, const std::vector<ScanLink>& links,
                                     const std::vector<TargetObservation>& observations,
                                     const std::vector<io::ControlPoint>& control, const GeorefOptions& o,
-                                    const CancelToken& cancel) {
+                                    const CancelToken& cancel, const std::vector<bool>& held) {
   if (Status s = o.Validate(); !s) return s.error();
   const int n_scans = static_cast<int>(poses.size());
   for (const TargetObservation& ob : observations)
@@ -436,6 +443,7 @@ Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& poses,
   adj.control = &control;
   adj.options = &o;
   adj.control_local = to;
+  adj.held = held;
   adj.target_of_control = target_of;
   for (int i = 0; i < n_scans; ++i) adj.start.push_back(*local_from_world * poses[i]);
   for (const Target& t : targets) adj.start_x.push_back(*local_from_world * t.world);

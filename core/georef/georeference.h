@@ -94,12 +94,13 @@ struct GeorefResult {
   int targets = 0;  // distinct targets found in the scans
 };
 
-// Errors: bad options, an observation naming a missing scan, fewer than 3 control points tied to
-// targets (naming how many were found), control points on one line, cancel.
+// held[i]: scan i is kept as placed relative to the others (a hand placement): it moves with the
+// datum only. Errors: bad options, an observation naming a missing scan, fewer than 3 control
+// points tied to targets (naming how many were found), control points on one line, cancel.
 Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& world_from_scan,
                                     const std::vector<ScanLink>& links,
                                     const std::vector<TargetObservation>& observations,
                                     const std::vector<io::ControlPoint>& control, const GeorefOptions& options,
-                                    const CancelToken& cancel);
+                                    const CancelToken& cancel, const std::vector<bool>& held = {});
 
 }  // namespace scanreg::georef

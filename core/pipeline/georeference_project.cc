@@ -62,6 +62,7 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
   for (std::size_t r = 0; r < targets.size(); ++r) {
     const int p = project.FindScan(targets[r].scan);
     if (p < 0 || index_of[p] < 0) continue;  // the scan is not registered
+    if (project.scans[p].manual_pose) continue;  // held as placed (below): its targets pull nothing
     georef::TargetObservation ob;
     ob.scan = index_of[p];
     ob.center = targets[r].center;
@@ -75,10 +76,15 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
     if (l.status == io::LinkStatus::kFailed || l.user_rejected) continue;
     const int a = project.FindScan(l.parent), b = project.FindScan(l.child);
     if (a < 0 || b < 0 || index_of[a] < 0 || index_of[b] < 0) continue;
+    if (project.scans[b].manual_pose) continue;  // the hand placement overrides that link
     links.push_back({index_of[a], index_of[b], l.parent_from_child});
   }
   progress.Report(0.85, "adjusting onto control");
-  auto result = georef::Georeference(poses, links, observations, project.control, options.georef, cancel);
+  // A scan the user placed by hand keeps that placement relative to the others: it moves with the
+  // project into the control frame and nothing else.
+  std::vector<bool> held;
+  for (int p : scan_of) held.push_back(project.scans[p].manual_pose);
+  auto result = georef::Georeference(poses, links, observations, project.control, options.georef, cancel, held);
   if (!result) {
     project.targets = targets;  // what was found is worth showing even when it cannot place the project
     return result.error();

@@ -2,7 +2,9 @@
 // found (options.spheres), the user's picked and named targets kept, and the adjustment of
 // core/georef/georeference.h places the project on its control points (options.georef). The
 // project's poses, targets and residuals are rewritten; RegisterProjectScans runs this whenever
-// the project has control points, so the CLI and the GUI georeference the same way.
+// the project has control points, so the CLI and the GUI georeference the same way. A scan placed
+// by hand (io::ProjectScan::manual_pose) keeps its placement relative to the others: it moves with
+// the project, and its targets are not used.
 #pragma once
 
 #include <vector>

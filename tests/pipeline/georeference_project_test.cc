@@ -149,6 +149,22 @@ TEST_F(GeoreferenceProjectTest, AControlPointFiveCentimetresOffIsFlaggedNotSprea
   EXPECT_NE(html.substr(tr, row - tr).find("failed"), std::string::npos) << html.substr(tr, 200);
   EXPECT_NE(html.find("blunder", row), std::string::npos);
 
+  // A scan the user placed by hand keeps its placement relative to the root: its targets (here
+  // moved 3 cm, as if its hand placement were off) do not pull it.
+  p = done_->project;
+  const int hand = 2, root = p.FindScan(*p.root);
+  ASSERT_GE(root, 0);
+  p.scans[hand].manual_pose = true;
+  p.scans[hand].world_from_scan.translation() += Eigen::Vector3d(0.03, 0, 0);
+  const Eigen::Isometry3d placed = p.scans[root].world_from_scan.inverse() * p.scans[hand].world_from_scan;
+  r = GeoreferenceProject(p, done_->scans, options, progress, cancel);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const Eigen::Isometry3d kept = p.scans[root].world_from_scan.inverse() * p.scans[hand].world_from_scan;
+  EXPECT_LT((kept.translation() - placed.translation()).norm(), 0.002) << "the hand placement stays (within the datum's mm)";
+  EXPECT_GT((p.scans[hand].world_from_scan.translation() - p.scans[hand].reference_world_from_scan->translation()).norm(),
+            0.02)
+      << "not pulled back onto the targets";
+
   p = done_->project;
   p.control.resize(2);
   const io::Project before = p;
