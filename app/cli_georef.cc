@@ -5,6 +5,7 @@
 
 #include "core/io/control_file.h"
 #include "core/pipeline/georeference_project.h"
+#include "core/pipeline/project_edits.h"
 
 namespace scanreg::cli {
 namespace {
@@ -36,13 +37,11 @@ std::vector<OptionSpec> ControlOptions() {
 }
 
 Status ImportControl(const Args& args, io::Project* project) {
-  if (auto file = args.Get("control")) {
-    auto control = io::ReadControlFile(*file);
-    if (!control) return control.error();
-    project->control = std::move(*control);
-    project->georef.reset();
-  }
-  return io::MarkCheckPoints(args.GetAll("check"), &project->control);
+  const std::vector<std::string> checks = args.GetAll("check");
+  if (auto file = args.Get("control")) return pipeline::ImportControl(*file, checks, *project);
+  if (checks.empty()) return Status::Ok();
+  project->georef.reset();  // the roles change: the residuals were graded with the old ones
+  return io::MarkCheckPoints(checks, &project->control);
 }
 
 void PrintGeoref(const io::Project& project, const pipeline::ProjectRegistration& result) {

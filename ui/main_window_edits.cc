@@ -5,7 +5,6 @@
 #include <QStatusBar>
 
 #include "core/common/log.h"
-#include "core/io/control_file.h"
 #include "core/io/project_tree.h"
 #include "core/pipeline/manual_alignment.h"
 #include "core/pipeline/project_edits.h"
@@ -271,14 +270,11 @@ bool MainWindow::RenameScan(const QString& scan, const QString& new_name) {
 }
 
 bool MainWindow::ImportControl(const QString& path) {
-  auto control = io::ReadControlFile(path.toStdString());
-  if (!control) {
-    ShowError(tr("Import control points"), QString::fromStdString(control.error().message));
+  io::Project after = project();
+  if (Status s = pipeline::ImportControl(path.toStdString(), {}, after); !s) {
+    ShowError(tr("Import control points"), QString::fromStdString(s.error().message));
     return false;
   }
-  io::Project after = project();
-  after.control = std::move(*control);
-  after.georef.reset();  // the residuals were against other control
   const int n = static_cast<int>(after.control.size());
   doc_->Edit(tr("import %1 control points").arg(n), std::move(after));
   statusBar()->showMessage(tr("%1 control points imported: register (Ctrl+R) to place the project on them").arg(n),

@@ -7,6 +7,7 @@
 #include "core/common/log.h"
 #include "core/common/output_set.h"
 #include "core/io/control_file.h"
+#include "core/pipeline/project_edits.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
@@ -194,11 +195,10 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
     if (Status s = ApplyPoses(*file, *poses, reference, project); !s) return s.error();
   }
   if (options.control) {
-    Expected<std::vector<io::ControlPoint>> control = io::ReadControlFile(*options.control);
-    if (!control) return control.error();
-    project.control = std::move(*control);
+    if (Status s = ImportControl(*options.control, options.check_points, project); !s) return s.error();
+  } else if (!options.check_points.empty()) {
+    return MakeError(ErrorCode::kInvalidArgument, "check points need a control file (--control FILE)");
   }
-  if (Status s = io::MarkCheckPoints(options.check_points, &project.control); !s) return s.error();
   if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return s.error();
   return CreatedProject{std::move(project), std::move(*scans), std::move(skipped)};
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/io/control_file.h"
 #include "core/io/project_tree.h"
 #include "core/pipeline/register_project.h"
 
@@ -250,6 +251,16 @@ Status SetRoot(const std::string& scan, io::Project& project) {
   if (s < 0) return MakeError(ErrorCode::kInvalidArgument, "'" + scan + "' is not a scan of the project");
   project.root = scan;
   project.scans[s].parent_override.reset();
+  return Status::Ok();
+}
+
+Status ImportControl(const std::filesystem::path& file, const std::vector<std::string>& check_points,
+                     io::Project& project) {
+  Expected<std::vector<io::ControlPoint>> control = io::ReadControlFile(file);
+  if (!control) return control.error();
+  if (Status s = io::MarkCheckPoints(check_points, &*control); !s) return s;
+  project.control = std::move(*control);
+  project.georef.reset();
   return Status::Ok();
 }
 

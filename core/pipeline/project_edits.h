@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,5 +65,12 @@ struct OverrideOutcome {
 Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector<Scan>& scans,
                                          const std::string& child, const std::optional<std::string>& parent,
                                          RegisterOptions options, ProgressSink& progress, const CancelToken& cancel);
+
+// Survey control (issue 15): the points of a control file (io::ReadControlFile) replace the
+// project's, `check_points` among them become check points, and the last adjustment's residuals
+// (against other control) are dropped. Errors name the file and line, or the unknown check point;
+// the project is unchanged then.
+Status ImportControl(const std::filesystem::path& file, const std::vector<std::string>& check_points,
+                     io::Project& project);
 
 }  // namespace scanreg::pipeline
