@@ -220,6 +220,8 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"json", false, false, "       print the result as JSON"},
        ControlOptions()[0], ControlOptions()[1],
        {"sphere-radius", true, false, "METRES   radius of the sphere targets (default 0.0725: 145 mm spheres)"},
+       {"checker-size", true, false,
+        "METRES   side of the checkerboard targets' 2 x 2 pattern (default 0.2; 0: do not look for them)"},
        {"control-tolerance", true, false,
         "METRES   control residual tolerance: green below half, orange up to it, red beyond (default 0.01)"},
        {"levelled", true, false,

@@ -23,6 +23,8 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"no-reflectance", false, false, "       write a constant reflectance of 0.5 (as some exporters do): geometry only"},
     {"sphere-targets", true, false, "N        N sphere targets (145 mm) on tripods along the street, and DIR/control.csv "
                                     "with their control coordinates (default 0)"},
+    {"checker-targets", true, false, "N        N checkerboard targets (20 cm) on the façades along the street, in "
+                                     "DIR/control.csv too (default 0)"},
     {"control-noise", true, false, "METRES   sigma per axis of the control coordinates (default 0.002)"},
     {"tilt", true, false, "DEG      largest tilt of a station from upright (default 0.5; 0: levelled scans)"},
     {"utm", false, false, "       place the project at UTM-sized coordinates (E 512 km, N 5 402 km, H 100 m, grid "
@@ -75,7 +77,10 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   if (!control_noise) return control_noise.error();
   auto tilt = args.GetDouble("tilt", 0.5, 0.0, 20.0);
   if (!tilt) return tilt.error();
+  auto checkers = args.GetInt("checker-targets", 0, 0, 1000);
+  if (!checkers) return checkers.error();
   options.sphere_targets = *targets;
+  options.checker_targets = *checkers;
   options.control_noise_m = *control_noise;
   options.max_tilt_deg = *tilt;
   if (args.Has("utm")) {
@@ -117,8 +122,8 @@ int RunSimulate(const std::vector<std::string>& argv) {
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
   std::printf("reference poses are the true poses; scans are unregistered (identity header pose)\n");
-  if (options->sphere_targets > 0) {
-    std::printf("control points of the %d sphere targets: %s (register --control it)\n", options->sphere_targets,
+  if (options->sphere_targets + options->checker_targets > 0) {
+    std::printf("control points of the targets: %s (register --control it)\n",
                 (project->file.parent_path() / "control.csv").string().c_str());
   }
   return 0;

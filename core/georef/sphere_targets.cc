@@ -1,5 +1,7 @@
 #include "core/georef/sphere_targets.h"
 
+#include "core/georef/angular_steps.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -9,31 +11,6 @@ namespace scanreg::georef {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-// Median angle between the lines of sight of neighbouring cells (radians): along rows (dc) and
-// along columns (dr). From directions, so range noise does not widen it.
-void AngularSteps(const Scan& scan, double* dc, double* dr) {
-  std::vector<double> c, r;
-  const int row_stride = std::max(1, scan.rows / 64), col_stride = std::max(1, scan.cols / 256);
-  auto angle = [&](int r0, int c0, int r1, int c1) {
-    const Eigen::Vector3d a = scan.Point(r0, c0).cast<double>().normalized(), b = scan.Point(r1, c1).cast<double>().normalized();
-    return std::atan2(a.cross(b).norm(), a.dot(b));
-  };
-  for (int row = 0; row + 1 < scan.rows; row += row_stride) {
-    for (int col = 0; col + 1 < scan.cols; col += col_stride) {
-      if (!scan.IsValid(row, col) || scan.Point(row, col).norm() < 1e-6) continue;
-      if (scan.IsValid(row, col + 1) && scan.Point(row, col + 1).norm() > 1e-6) c.push_back(angle(row, col, row, col + 1));
-      if (scan.IsValid(row + 1, col) && scan.Point(row + 1, col).norm() > 1e-6) r.push_back(angle(row, col, row + 1, col));
-    }
-  }
-  auto median = [](std::vector<double>& v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  *dc = median(c);
-  *dr = median(r);
-}
 
 struct Key {
   long x, y, z;

@@ -17,7 +17,9 @@ struct TargetRecord {
   std::string scan;           // scan name
   std::string name;           // control point name, or "t<k>" for a target no control point ties
   bool named_by_user = false;  // the user named it: the name ties it to control and is kept
-  std::string kind = "sphere";  // "sphere": found by its geometry; "picked": placed by the user
+  // "sphere": found by its geometry; "checker": a checkerboard found in the reflectance;
+  // "picked": placed by the user
+  std::string kind = "sphere";
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // scanner frame, metres
   double sigma_m = 0.001;     // standard deviation of the centre
   double rms_m = 0;           // fit RMS (spheres)

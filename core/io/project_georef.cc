@@ -100,7 +100,7 @@ Status GeorefFromJson(const json& j, const std::string& where, Project* project)
       r.name = t.value("name", "");
       r.named_by_user = t.value("named_by_user", false);
       r.kind = t.value("kind", "sphere");
-      if (r.kind != "sphere" && r.kind != "picked")
+      if (r.kind != "sphere" && r.kind != "checker" && r.kind != "picked")
         return MakeError(ErrorCode::kParseError, what + ": kind must be 'sphere' or 'picked'");
       auto c = VecFrom(t.at("center"), what + " center");
       if (!c) return c.error();

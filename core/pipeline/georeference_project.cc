@@ -3,6 +3,8 @@
 #include <map>
 
 #include "core/common/log.h"
+#include "core/georef/checker_targets.h"
+#include "core/georef/sphere_targets.h"
 
 namespace scanreg::pipeline {
 
@@ -32,7 +34,8 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
     scan_of.push_back(static_cast<int>(i));
     poses.push_back(project.scans[i].world_from_scan);
   }
-  // Targets: the user's picked ones and names stay; spheres are found anew in every registered scan.
+  // Targets: the user's picked ones and names stay; spheres and checkerboards are found anew in
+  // every registered scan.
   std::vector<io::TargetRecord> targets;
   for (const io::TargetRecord& t : project.targets)
     if (t.kind == "picked") targets.push_back(t);
@@ -40,19 +43,35 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "georeferencing cancelled");
     progress.Report(0.8 * k / scan_of.size(), "finding targets in " + project.scans[scan_of[k]].name);
     const Scan& scan = scans[scan_of[k]];
-    auto found = georef::DetectSphereTargets(scan, options.spheres, cancel);
-    if (!found) return found.error();
-    for (const georef::DetectedSphere& s : *found) {
+    auto spheres = georef::DetectSphereTargets(scan, options.spheres, cancel);
+    if (!spheres) return spheres.error();
+    std::vector<io::TargetRecord> found;
+    for (const georef::DetectedSphere& s : *spheres) {
       io::TargetRecord t;
-      t.scan = scan.name;
       t.kind = "sphere";
       t.center = s.center;
       t.sigma_m = s.sigma_m;
       t.rms_m = s.rms_m;
       t.points = s.points;
-      // A name the user gave a sphere of this scan before stays with it.
+      found.push_back(t);
+    }
+    if (options.checkers.size_m > 0) {
+      auto boards = georef::DetectCheckerTargets(scan, options.checkers, cancel);
+      if (!boards) return boards.error();
+      for (const georef::DetectedChecker& b : *boards) {
+        io::TargetRecord t;
+        t.kind = "checker";
+        t.center = b.center;
+        t.sigma_m = b.sigma_m;
+        t.points = b.points;  // its quality is the centre's sigma (rms_m is a sphere's fit in metres)
+        found.push_back(t);
+      }
+    }
+    for (io::TargetRecord& t : found) {
+      t.scan = scan.name;
+      // A name the user gave a target of this scan before stays with it.
       for (const io::TargetRecord& old : project.targets)
-        if (old.named_by_user && old.kind == "sphere" && old.scan == t.scan && (old.center - t.center).norm() < 0.02)
+        if (old.named_by_user && old.kind == t.kind && old.scan == t.scan && (old.center - t.center).norm() < 0.02)
           t.name = old.name, t.named_by_user = true;
       targets.push_back(t);
     }

@@ -1,5 +1,5 @@
-// Georeferencing a registered project (issue 15): the sphere targets of every registered scan are
-// found (options.spheres), the user's picked and named targets kept, and the adjustment of
+// Georeferencing a registered project (issue 15): the sphere and checkerboard targets of every
+// registered scan are found (options.spheres, options.checkers), the user's picked and named targets kept, and the adjustment of
 // core/georef/georeference.h places the project on its control points (options.georef). The
 // project's poses, targets and residuals are rewritten; RegisterProjectScans runs this whenever
 // the project has control points, so the CLI and the GUI georeference the same way. A scan placed

@@ -64,6 +64,8 @@ RegisterOptions::RegisterOptions() {
 
 Status RegisterOptions::Validate() const {
   if (Status s = spheres.Validate(); !s) return s;
+  if (checkers.size_m != 0)
+    if (Status s = checkers.Validate(); !s) return s;
   if (Status s = georef.Validate(); !s) return s;
   if (!(range_sigma_m >= 0 && range_sigma_m < 1)) {
     return MakeError(ErrorCode::kInvalidArgument, "range sigma must be between 0 and 1 m (0: from the data)");

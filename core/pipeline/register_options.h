@@ -11,6 +11,7 @@
 #include "core/features/matching.h"
 #include "core/features/sift.h"
 #include "core/georef/georeference.h"
+#include "core/georef/checker_targets.h"
 #include "core/georef/sphere_targets.h"
 #include "core/registration/coarse.h"
 #include "core/registration/geometric_features.h"
@@ -103,9 +104,11 @@ struct RegisterOptions {
   std::vector<std::string> only_scans;
   std::optional<std::string> root;          // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
-  // Georeferencing (issue 15), when the project has control points: the sphere targets sought in
-  // every registered scan and the adjustment onto control (core/pipeline/georeference_project.h).
+  // Georeferencing (issue 15), when the project has control points: the sphere and checkerboard
+  // targets sought in every registered scan (checkers.size_m 0: no checkerboards) and the
+  // adjustment onto control (core/pipeline/georeference_project.h).
   georef::SphereTargetOptions spheres;
+  georef::CheckerTargetOptions checkers;
   georef::GeorefOptions georef;
   Status Validate() const;
 };

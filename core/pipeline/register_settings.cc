@@ -73,6 +73,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.global", "global", "global registration", {}, true},
       {"register.keep_imported", "keep-imported", "keep imported poses fixed", {}, true},
       {"register.sphere_radius_m", "sphere-radius", "sphere target radius (m)", {}},
+      {"register.checker_size_m", "checker-size", "checkerboard target size (m; 0: none)", {}},
       {"register.control_tolerance_m", "control-tolerance", "control residual tolerance (m)", {}},
       {"register.levelled_deg", "levelled", "levelled scans: accuracy (°; 0: not levelled)", {}},
   };
@@ -90,6 +91,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.global") return o.global ? "true" : "false";
   if (key == "register.keep_imported") return o.keep_imported ? "true" : "false";
   if (key == "register.sphere_radius_m") return Number(o.spheres.radius_m);
+  if (key == "register.checker_size_m") return Number(o.checkers.size_m);
   if (key == "register.control_tolerance_m") return Number(o.georef.tolerance_m);
   if (key == "register.levelled_deg") return Number(o.georef.levelled_sigma_rad * 180.0 / M_PI);
   return "";
@@ -122,6 +124,11 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
   if (key == "register.overlap_distance_m") return SetNumber(s, value, 0.0, 100.0, &o->overlap_distance_m);
   if (key == "register.sphere_radius_m") return SetNumber(s, value, 0.005, 2.0, &o->spheres.radius_m);
+  if (key == "register.checker_size_m") {
+    if (Status st = SetNumber(s, value, 0.0, 2.0, &o->checkers.size_m); !st) return st;
+    if (o->checkers.size_m != 0 && o->checkers.size_m < 0.02) return Bad(s, value, "give 0 (none) or 0.02 to 2 m");
+    return Status::Ok();
+  }
   if (key == "register.control_tolerance_m") return SetNumber(s, value, 0.0001, 10.0, &o->georef.tolerance_m);
   if (key == "register.levelled_deg") {
     double deg = 0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
+#include <utility>
 
 #include "core/simulate/random.h"
 
@@ -18,7 +20,10 @@ SceneOptions ProjectScene(const SimulatedProjectOptions& o) {
   SceneOptions s = o.scene;
   s.street_length_m = std::max(s.street_length_m, SpanOf(o) + 60.0);
   s.far_site = s.far_site || o.add_far_station;
-  for (const SimulatedTarget& t : SimulatedTargets(o)) s.sphere_targets.push_back(t.world);
+  for (const SimulatedTarget& t : SimulatedTargets(o)) {
+    if (t.kind == "sphere") s.sphere_targets.push_back(t.world);
+    else s.checker_targets.push_back({t.world, t.normal, o.checker_size_m});
+  }
   return s;
 }
 
@@ -55,6 +60,12 @@ Status SimulatedProjectOptions::Validate() const {
   if (sphere_targets < 0 || sphere_targets > 1000)
     return MakeError(ErrorCode::kInvalidArgument,
                      "project: " + std::to_string(sphere_targets) + " sphere targets; use between 0 and 1000");
+  if (checker_targets < 0 || checker_targets > 1000)
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: " + std::to_string(checker_targets) + " checkerboard targets; use between 0 and 1000");
+  if (!(checker_size_m >= 0.05 && checker_size_m <= 1.0))
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "project: checkerboard size " + std::to_string(checker_size_m) + " m is outside [0.05, 1] m");
   if (!(control_noise_m >= 0 && control_noise_m <= 1))
     return MakeError(ErrorCode::kInvalidArgument, "project: control noise must be in [0, 1] m");
   if (!control_from_world.matrix().allFinite() ||
@@ -81,9 +92,37 @@ std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptio
   return poses;
 }
 
+namespace {
+
+// Where a horizontal ray from the street's centre line meets a façade that is flat for a board
+// around the hit (every probe ray lands on the same plane): the board's centre 2 mm proud of the
+// wall, and the wall's normal. Tries further along x when a pole, tree or window is in the way.
+std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> PlaceOnWall(const Scene& walls, double x, double side,
+                                                                      double height, double size) {
+  for (int attempt = 0; attempt < 40; ++attempt) {
+    const double xa = x + (attempt % 2 == 0 ? 1 : -1) * 0.35 * ((attempt + 1) / 2);
+    const Eigen::Vector3d origin(xa, 0.0, height), dir(0.0, side, 0.0);
+    const auto hit = walls.Intersect(origin, dir, 60.0);
+    if (!hit || std::abs(hit->normal.z()) > 0.02) continue;
+    const Eigen::Vector3d p = origin + hit->range * dir, n = hit->normal;
+    const Eigen::Vector3d u = Eigen::Vector3d::UnitZ().cross(n).normalized(), v = n.cross(u);
+    bool flat = true;
+    for (int k = 0; k < 8 && flat; ++k) {
+      const double a = k * M_PI / 4;
+      const Eigen::Vector3d q = p + 0.8 * size * (std::cos(a) * u + std::sin(a) * v) + 0.5 * n;
+      const auto h = walls.Intersect(q, -n, 1.0);
+      flat = h && std::abs(h->range - 0.5) < 0.002 && std::abs(h->albedo - hit->albedo) < 0.3;
+    }
+    if (flat) return std::make_pair(Eigen::Vector3d(p + 0.002 * n), n);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& o) {
   std::vector<SimulatedTarget> targets;
-  if (o.sphere_targets <= 0) return targets;
+  if (o.sphere_targets <= 0 && o.checker_targets <= 0) return targets;
   sim::Rng rng(sim::Hash(o.seed, 0x7a67));
   // Along the stations (and a little beyond the ends), alternating sides on the road between the
   // scanners' lane and the parked cars, at tripod heights.
@@ -96,6 +135,27 @@ std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& o) 
                               rng.Uniform(1.2, 1.7));
     t.control = o.control_from_world * t.world;
     t.measured = t.control + o.control_noise_m * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    targets.push_back(t);
+  }
+  if (o.checker_targets <= 0) return targets;
+  SceneOptions bare = o.scene;  // the street the boards are stuck on (targets do not move walls)
+  bare.street_length_m = std::max(bare.street_length_m, SpanOf(o) + 60.0);
+  bare.sphere_targets.clear();
+  bare.checker_targets.clear();
+  const Scene walls = MakeScene(bare);
+  sim::Rng crng(sim::Hash(o.seed, 0xc4ec));
+  for (int k = 0; k < o.checker_targets; ++k) {
+    const double f = o.checker_targets == 1 ? 0.5 : double(k) / (o.checker_targets - 1);
+    const double x = (f - 0.5) * span + crng.Uniform(-0.5, 0.5), height = crng.Uniform(1.5, 2.5);
+    const auto placed = PlaceOnWall(walls, x, k % 2 == 0 ? -1.0 : 1.0, height, o.checker_size_m);
+    if (!placed) continue;  // no flat wall near this spot: one target fewer
+    SimulatedTarget t;
+    t.name = "C" + std::to_string(k + 1);
+    t.kind = "checker";
+    t.world = placed->first;
+    t.normal = placed->second;
+    t.control = o.control_from_world * t.world;
+    t.measured = t.control + o.control_noise_m * Eigen::Vector3d(crng.Gaussian(), crng.Gaussian(), crng.Gaussian());
     targets.push_back(t);
   }
   return targets;

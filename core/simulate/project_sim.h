@@ -28,6 +28,10 @@ struct SimulatedProjectOptions {
   // Survey sphere targets on tripods, spread along the stations on both sides of the street
   // (scene.sphere_target_radius_m), named "T1", "T2", ... in order along +x.
   int sphere_targets = 0;
+  // Checkerboard targets stuck on the façades (2 mm proud of the wall), spread along the stations on
+  // both sides, 1.5-2.5 m up, named "C1", "C2", ... in order along +x.
+  int checker_targets = 0;
+  double checker_size_m = 0.2;  // side of the 2 x 2 pattern
   double control_noise_m = 0.002;  // sigma per axis of the simulated control coordinates (total station / GNSS)
   // Where the project sits in the survey's coordinate system (a national grid, UTM): the scans'
   // reference poses and the targets' control coordinates are control_from_world times the scene's.
@@ -38,12 +42,14 @@ struct SimulatedProjectOptions {
 
 struct SimulatedTarget {
   std::string name;
+  std::string kind = "sphere";  // "sphere" or "checker"
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // checkerboards: the board's normal (scene frame)
   Eigen::Vector3d world = Eigen::Vector3d::Zero();    // centre in the scene
   Eigen::Vector3d control = Eigen::Vector3d::Zero();  // control_from_world * world
   Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // control plus noise of control_noise_m per axis
 };
 
-// The sphere targets SimulateProject places (empty when options.sphere_targets is 0).
+// The targets SimulateProject places: spheres, then checkerboards (empty when there are none).
 std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& options);
 
 // Scans named "s01", "s02", ... in station order along +x; the far station, if any, comes last.

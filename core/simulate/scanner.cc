@@ -86,6 +86,8 @@ Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_f
   std::vector<float> range(n, 0.0f), signal(n, 0.0f);
   std::vector<int> primitive(n, -1);
   const Eigen::Matrix3d rot = world_from_scanner.linear();
+  // The beam's footprint spans about one cell: a standard deviation of half the azimuth step.
+  const double footprint_per_m = M_PI / cols;
   const Eigen::Vector3d origin = world_from_scanner.translation();
   std::atomic<bool> cancelled{false};
   std::atomic<int> rows_done{0};
@@ -100,7 +102,7 @@ Expected<Scan> SimulateScan(const Scene& scene, const Eigen::Isometry3d& world_f
     }
     for (int c = 0; c < cols; ++c) {
       const Eigen::Vector3d dir = rot * Eigen::Vector3d(cos_el[r] * cos_az[c], cos_el[r] * sin_az[c], sin_el[r]);
-      const auto hit = scene.Intersect(origin, dir, options.max_range_m);
+      const auto hit = scene.Intersect(origin, dir, options.max_range_m, footprint_per_m);
       if (!hit || hit->range < options.min_range_m) continue;
       const double cos_incidence = std::abs(hit->normal.dot(dir));
       const double s = hit->albedo * cos_incidence / (1.0 + hit->range / options.falloff_range_m);

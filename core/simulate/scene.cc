@@ -201,12 +201,13 @@ bool Scene::HitPrimitive(int index, const Eigen::Vector3d& o, const Eigen::Vecto
 }
 
 std::optional<Scene::Hit> Scene::MakeHit(int index, double t, int face, const Eigen::Vector2d& uv,
-                                         const Eigen::Vector3d& normal, const Eigen::Vector3d& dir) const {
+                                         const Eigen::Vector3d& normal, const Eigen::Vector3d& dir,
+                                         double footprint_half_m) const {
   const int tex = prims_[index].texture[face];
   Hit hit;
   hit.range = t;
   hit.normal = normal.dot(dir) > 0.0 ? Eigen::Vector3d(-normal) : normal;
-  hit.albedo = (tex >= 0 && tex < static_cast<int>(textures_.size())) ? textures_[tex].Albedo(uv.x(), uv.y()) : 0.5;
+  hit.albedo = (tex >= 0 && tex < static_cast<int>(textures_.size())) ? textures_[tex].Albedo(uv.x(), uv.y(), footprint_half_m) : 0.5;
   hit.primitive = index;
   return hit;
 }
@@ -260,7 +261,7 @@ void Scene::Build() {
 }
 
 std::optional<Scene::Hit> Scene::Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                                           double max_range) const {
+                                           double max_range, double footprint_per_m) const {
   if (nodes_.empty()) return IntersectBruteForce(origin, dir, max_range);
   Eigen::Vector3d inv;
   for (int i = 0; i < 3; ++i) inv[i] = 1.0 / (dir[i] != 0.0 ? dir[i] : 1e-300);
@@ -291,7 +292,7 @@ std::optional<Scene::Hit> Scene::Intersect(const Eigen::Vector3d& origin, const 
     }
   }
   if (best < 0) return std::nullopt;
-  return MakeHit(best, t, face, uv, n, dir);
+  return MakeHit(best, t, face, uv, n, dir, t * footprint_per_m);
 }
 
 }  // namespace scanreg

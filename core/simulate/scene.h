@@ -46,8 +46,10 @@ class Scene {
   void Build();
 
   // First surface hit by the ray origin + t * dir, 0 < t <= max_range; dir must be unit length.
-  // Thread-safe once built.
-  std::optional<Hit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range) const;
+  // footprint_per_m: the standard deviation of the beam's footprint per metre of range (its albedo
+  // is averaged over it where a texture has sharp edges). Thread-safe once built.
+  std::optional<Hit> Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range,
+                               double footprint_per_m = 0.0) const;
   // The same by testing every primitive (reference for tests).
   std::optional<Hit> IntersectBruteForce(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                                          double max_range) const;
@@ -78,7 +80,7 @@ class Scene {
   bool HitPrimitive(int index, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t_best, int* face,
                     Eigen::Vector2d* uv, Eigen::Vector3d* normal) const;
   std::optional<Hit> MakeHit(int index, double t, int face, const Eigen::Vector2d& uv, const Eigen::Vector3d& normal,
-                             const Eigen::Vector3d& dir) const;
+                             const Eigen::Vector3d& dir, double footprint_half_m = 0.0) const;
   int BuildNode(int first, int count);
 
   std::vector<SurfaceTexture> textures_;
@@ -102,6 +104,14 @@ struct SceneOptions {
   // Survey sphere targets (white, on a thin tripod pole down to the ground): their centres.
   std::vector<Eigen::Vector3d> sphere_targets;
   double sphere_target_radius_m = 0.0725;  // 145 mm spheres, a common size
+  // Checkerboard targets: a square board (the pattern with a light margin) centred at `center`,
+  // facing `normal`, the pattern's edges horizontal and vertical (on a vertical board).
+  struct CheckerTarget {
+    Eigen::Vector3d center = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
+    double size_m = 0.2;  // side of the 2 x 2 pattern
+  };
+  std::vector<CheckerTarget> checker_targets;
 
   Status Validate() const;
 };

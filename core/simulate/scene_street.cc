@@ -289,6 +289,13 @@ Status SceneOptions::Validate() const {
                                                       std::to_string(sphere_target_radius_m) + " m is outside [0.01, 1] m");
   for (const Vec3& c : sphere_targets)
     if (!c.allFinite()) return MakeError(ErrorCode::kInvalidArgument, "scene: a sphere target centre is not finite");
+  for (const CheckerTarget& t : checker_targets) {
+    if (!t.center.allFinite() || !t.normal.allFinite() || t.normal.norm() < 1e-6)
+      return MakeError(ErrorCode::kInvalidArgument, "scene: a checkerboard target's centre or normal is not valid");
+    if (!(t.size_m >= 0.02 && t.size_m <= 2.0))
+      return MakeError(ErrorCode::kInvalidArgument, "scene: checkerboard size " + std::to_string(t.size_m) +
+                                                        " m is outside [0.02, 2] m");
+  }
   return Status::Ok();
 }
 
@@ -313,6 +320,14 @@ Scene MakeScene(const SceneOptions& options) {
       scene.AddSphere(c, r, white);
       if (c.z() - r > 0.05) scene.AddCylinder({c.x(), c.y()}, std::min(0.012, 0.3 * r), 0.0, c.z() - 0.9 * r, pole);
     }
+  }
+  for (const SceneOptions::CheckerTarget& t : o.checker_targets) {
+    const Vec3 n = t.normal.normalized();
+    Vec3 u = Vec3::UnitZ().cross(n);  // horizontal on a vertical board
+    u = u.norm() > 1e-6 ? u.normalized() : Vec3::UnitX();
+    SurfaceTexture checker = SurfaceTexture::Uniform(0.9f);  // the light margin round the pattern
+    checker.checker_half_m = 0.5 * t.size_m;
+    scene.AddRectangle(t.center, u, n.cross(u), 0.625 * t.size_m, 0.625 * t.size_m, scene.AddTexture(checker));
   }
   scene.Build();
   return scene;

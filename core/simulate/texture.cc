@@ -133,7 +133,14 @@ float Ground(const GroundMarkings& g, float asphalt, double u, double v, bool* p
 
 }  // namespace
 
-float SurfaceTexture::Albedo(double u, double v) const {
+float SurfaceTexture::Albedo(double u, double v, double footprint_half_m) const {
+  if (checker_half_m > 0.0 && std::abs(u) <= checker_half_m && std::abs(v) <= checker_half_m) {
+    // A Gaussian beam of standard deviation h: sign(u) sign(v) and the Gaussian are separable, so
+    // the beam's average is the product of the averages of each sign, erf(u / (h sqrt 2)) erf(...).
+    const double k = 1.0 / (std::max(footprint_half_m, 1e-6) * std::sqrt(2.0));
+    const double s = std::erf(u * k) * std::erf(v * k);
+    return static_cast<float>(0.5 * (checker_light + checker_dark) + 0.5 * (checker_light - checker_dark) * s);
+  }
   double a = base;
   bool paint = false;
   if (ground.enabled) a = Ground(ground, base, u, v, &paint);

@@ -51,10 +51,16 @@ struct SurfaceTexture {
   double stroke_length_m = 1.5;  // <= stroke_cell_m
   WindowGrid windows;
   GroundMarkings ground;
+  // A black-and-white checkerboard target: four squares meeting at (0, 0), light where u v > 0,
+  // for |u|, |v| below this half size (metres; 0: none). Its sharp edges are averaged over the
+  // beam's Gaussian footprint, as a real scanner's intensity is, so an edge cell returns grey.
+  double checker_half_m = 0.0;
+  float checker_dark = 0.05f, checker_light = 0.9f;
   std::uint64_t seed = 0;
 
-  // Albedo at surface coordinates (u, v), metres; clamped to [0.02, 0.98].
-  float Albedo(double u, double v) const;
+  // Albedo at surface coordinates (u, v), metres; clamped to [0.02, 0.98]. footprint_half_m: the
+  // standard deviation of the beam's footprint there (used by sharp-edged patterns: checkerboards).
+  float Albedo(double u, double v, double footprint_half_m = 0.0) const;
 
   static SurfaceTexture Uniform(float albedo) {
     SurfaceTexture t;

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+
+#include "core/simulate/project_sim.h"
 
 #include "core/simulate/random.h"
 
@@ -74,6 +77,39 @@ TEST(SceneTest, WindowsAreDarkerThanTheWall) {
   EXPECT_NEAR(t.Albedo(0.3, 5.7), 0.6, 1e-6);   // wall between windows
   EXPECT_NEAR(t.Albedo(1.5, 2.0), 0.6, 1e-6);   // ground floor: no window grid
   EXPECT_NEAR(t.Albedo(0.86, 5.7), t.windows.frame_albedo, 1e-6);
+}
+
+// A checkerboard: light where u v > 0, dark where u v < 0, and at an edge the beam's average: the
+// Gaussian footprint straddling a sharp edge returns the mean, half a sigma in a known erf share.
+TEST(SceneTest, CheckerboardEdgesAreAveragedOverTheFootprint) {
+  SurfaceTexture t = SurfaceTexture::Uniform(0.9f);
+  t.checker_half_m = 0.1;
+  const double mid = 0.5 * (t.checker_light + t.checker_dark), half = 0.5 * (t.checker_light - t.checker_dark);
+  EXPECT_NEAR(t.Albedo(0.05, 0.05, 0.002), t.checker_light, 1e-6);
+  EXPECT_NEAR(t.Albedo(-0.05, 0.05, 0.002), t.checker_dark, 1e-6);
+  EXPECT_NEAR(t.Albedo(0.0, 0.05, 0.002), mid, 1e-6);  // on the edge: half light, half dark
+  EXPECT_NEAR(t.Albedo(0.002, 0.05, 0.002), mid + half * std::erf(1 / std::sqrt(2.0)), 1e-6);  // one sigma in
+  EXPECT_NEAR(t.Albedo(0.2, 0.05, 0.002), 0.9, 1e-6);  // the board's margin
+}
+
+// Simulated checkerboards are stuck on flat façades, facing the street, 2 mm proud of the wall.
+TEST(SceneTest, SimulatedCheckerboardsAreOnWalls) {
+  SimulatedProjectOptions o;
+  o.stations = 4;
+  o.checker_targets = 6;
+  const std::vector<SimulatedTarget> targets = SimulatedTargets(o);
+  ASSERT_GE(targets.size(), 5u);
+  SceneOptions bare = o.scene;
+  bare.street_length_m = std::max(bare.street_length_m, 3 * o.spacing_m + 60.0);
+  const Scene walls = MakeScene(bare);
+  for (const SimulatedTarget& t : targets) {
+    EXPECT_EQ(t.kind, "checker");
+    EXPECT_NEAR(std::abs(t.normal.z()), 0.0, 0.02) << t.name;
+    EXPECT_LT(t.normal.y() * t.world.y(), 0.0) << t.name << " faces the street";
+    const auto hit = walls.Intersect(t.world + 0.1 * t.normal, -t.normal, 1.0);
+    ASSERT_TRUE(hit.has_value()) << t.name;
+    EXPECT_NEAR(hit->range, 0.102, 1e-6) << t.name;
+  }
 }
 
 TEST(SceneTest, HierarchyAgreesWithBruteForce) {
