@@ -314,10 +314,16 @@ void MainWindow::CreateMenus() {
                                     with_scan(tr("Release hand placement"),
                                               [this](const QString& s) { ReleaseHandPlacement(s); }));
   reg->addSeparator();
+  QAction* pick_target = reg->addAction(tr("Pick a &target in scan…"), this,
+                                        with_scan(tr("Pick a target"), [this](const QString& s) { PickTarget(s); }));
+  pick_target->setObjectName("PickTargetAction");
+  QAction* georef = reg->addAction(tr("&Georeference on control"), this, [this] { Georeference(); });
+  georef->setObjectName("GeoreferenceAction");
+  reg->addSeparator();
   QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
-  for (QAction* a : {pick, refine, edit_pose, release}) scan_list_->addAction(a);
-  project_actions_ = {save,   save_as, run,  add,    report,    only_new, refine_all, pick,
-                      refine, rename,  remove, relink, root, edit_pose, release,  settings};
+  for (QAction* a : {pick, refine, edit_pose, release, pick_target}) scan_list_->addAction(a);
+  project_actions_ = {save,   save_as, run,  add,    report,    only_new, refine_all, pick,      refine,
+                      rename, remove,  relink, root, edit_pose, release,  pick_target, georef, settings};
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);

@@ -28,6 +28,7 @@ class JobRunner;
 class LogPanel;
 class MergePanel;
 class PickPointsDialog;
+class PickTargetDialog;
 class PoseDialog;
 class ProjectDocument;
 class RegisterSettingsDialog;
@@ -80,6 +81,16 @@ class MainWindow : public QMainWindow {
   // an undoable edit; the next registration places the project on them. False, with a dialog
   // naming the file and line, when it cannot be read.
   bool ImportControl(const QString& path);
+  // Registration → Pick a target in scan…: the dialog for the scan (window-modal, does not block;
+  // null with a dialog when the scan is unknown). Accepting it calls AddPickedTarget.
+  PickTargetDialog* PickTarget(const QString& scan);
+  // The picked target joins the project (pipeline::AddPickedTarget, undoable); the next
+  // georeferencing uses it. False, with a dialog, when refused.
+  bool AddPickedTarget(const io::TargetRecord& target);
+  // Registration → Georeference on control: the registered project placed on its control points
+  // from its targets (pipeline::GeoreferenceProject) on the worker, without registering again;
+  // the result is an undoable edit, or a dialog says why it could not be placed.
+  bool Georeference();
   // Points the scan at another file (read on the worker; refused when it holds another grid).
   bool RelinkScan(const QString& scan, const QString& file);
   // Writes the registration report (dir/index.html and its pictures) on the worker.

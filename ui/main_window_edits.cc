@@ -269,19 +269,6 @@ bool MainWindow::RenameScan(const QString& scan, const QString& new_name) {
   return true;
 }
 
-bool MainWindow::ImportControl(const QString& path) {
-  io::Project after = project();
-  if (Status s = pipeline::ImportControl(path.toStdString(), {}, after); !s) {
-    ShowError(tr("Import control points"), QString::fromStdString(s.error().message));
-    return false;
-  }
-  const int n = static_cast<int>(after.control.size());
-  doc_->Edit(tr("import %1 control points").arg(n), std::move(after));
-  statusBar()->showMessage(tr("%1 control points imported: register (Ctrl+R) to place the project on them").arg(n),
-                           12000);
-  return true;
-}
-
 bool MainWindow::SetRoot(const QString& scan) {
   io::Project after = project();
   if (Status s = pipeline::SetRoot(scan.toStdString(), after); !s) {

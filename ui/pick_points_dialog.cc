@@ -17,43 +17,14 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/features/panorama.h"
 #include "core/pipeline/manual_alignment.h"
+#include "ui/picking_image.h"
 #include "ui/zoom_view.h"
 
 namespace scanreg::ui {
 namespace {
 
 constexpr int kSnapPixels = 8;
-
-// The panorama to pick in: the reflectance, or for scans without it (every return the same value)
-// the range, near bright and far dark, so that the scene's shapes show.
-QImage PickingImage(const Scan& scan) {
-  float lo_r = INFINITY, hi_r = -INFINITY;
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i]) lo_r = std::min(lo_r, scan.reflectance[i]), hi_r = std::max(hi_r, scan.reflectance[i]);
-  if (hi_r > lo_r) {
-    const cv::Mat gray = ReflectancePanorama(scan);
-    return QImage(gray.data, gray.cols, gray.rows, static_cast<int>(gray.step), QImage::Format_Grayscale8).copy();
-  }
-  std::vector<float> ranges;
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i]) ranges.push_back(scan.points[i].norm());
-  QImage image(scan.cols, scan.rows, QImage::Format_Grayscale8);
-  image.fill(0);
-  if (ranges.empty()) return image;
-  std::sort(ranges.begin(), ranges.end());
-  const float near = ranges[ranges.size() / 50], far = std::max(ranges[ranges.size() * 49 / 50], near + 1e-3f);
-  for (int r = 0; r < scan.rows; ++r) {
-    uchar* line = image.scanLine(r);
-    for (int c = 0; c < scan.cols; ++c) {
-      if (!scan.IsValid(r, c)) continue;
-      const float t = std::clamp((scan.Point(r, c).norm() - near) / (far - near), 0.0f, 1.0f);
-      line[c] = static_cast<uchar>(1 + 254 * (1 - t));
-    }
-  }
-  return image;
-}
 
 Eigen::Vector3d PointAt(const Scan& scan, int row, int col) { return scan.Point(row, col).cast<double>(); }
 
@@ -164,20 +135,12 @@ void PickPointsDialog::ShowScans() {
 bool PickPointsDialog::Pick(bool in_parent, QPointF pixel) {
   const Scan* scan = FindScan(in_parent ? ParentScan() : child_name_);
   if (!scan) return false;
-  const int c0 = static_cast<int>(std::floor(pixel.x())), r0 = static_cast<int>(std::floor(pixel.y()));
-  int best = -1;
-  Cell cell;
-  for (int r = std::max(0, r0 - kSnapPixels); r <= std::min(scan->rows - 1, r0 + kSnapPixels); ++r)
-    for (int c = std::max(0, c0 - kSnapPixels); c <= std::min(scan->cols - 1, c0 + kSnapPixels); ++c) {
-      const int d = (r - r0) * (r - r0) + (c - c0) * (c - c0);
-      if (!scan->IsValid(r, c) || d > kSnapPixels * kSnapPixels || (best >= 0 && d >= best)) continue;
-      best = d;
-      cell = {r, c};
-    }
-  if (best < 0) {
+  const auto snapped = SnapToCell(*scan, pixel, kSnapPixels);
+  if (!snapped) {
     status_->setText(tr("No return near that pixel (sky or a gap): pick a point on a surface."));
     return false;
   }
+  const Cell cell{snapped->first, snapped->second};
   std::vector<Cell>& side = in_parent ? parent_picks_ : child_picks_;
   std::vector<Cell>& other = in_parent ? child_picks_ : parent_picks_;
   if (side.size() > other.size()) side.back() = cell;  // a second click on the same side moves the open pick

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include "core/georef/angular_steps.h"
 
@@ -29,6 +30,20 @@ struct Panorama {
   }
 };
 
+// The scan with its angular steps: what the response and the fit need.
+struct Grid {
+  const Scan& scan;
+  Panorama pano;
+  double dc = 0, dr = 0;  // radians between neighbouring columns, rows
+};
+
+std::optional<Grid> MakeGrid(const Scan& scan) {
+  double dc = 0, dr = 0;
+  AngularSteps(scan, &dc, &dr);
+  if (!(dc > 0) || !(dr > 0)) return std::nullopt;
+  return Grid{scan, Panorama{scan, scan.cols * dc > 2 * M_PI * 0.99}, dc, dr};
+}
+
 // ChESS response of a ring of 16 samples about the centre value.
 double ChessResponse(const std::array<float, 16>& s, float centre) {
   double sum = 0, diff = 0, mean = 0;
@@ -36,6 +51,41 @@ double ChessResponse(const std::array<float, 16>& s, float centre) {
   for (int n = 0; n < 8; ++n) diff += std::abs(s[n] - s[n + 8]);
   for (float v : s) mean += v;
   return sum - diff - 16.0 * std::abs(mean / 16.0 - centre);
+}
+
+// The checker response at cell (r, c), 0 where it cannot be computed or fails the quick test.
+float Response(const Grid& g, int r, int c, const CheckerTargetOptions& o) {
+  const double size = o.size_m;
+  const float quick = static_cast<float>(o.min_contrast);
+    if (!g.scan.IsValid(r, c)) return 0.0f;
+    const double range = g.scan.Point(r, c).norm();
+    if (range > o.max_range_m || range < 0.5 * size) return 0.0f;
+    const double ring = 0.3 * size / range, rc = ring / g.dc, rr = ring / g.dr;
+    if (std::min(rc, rr) < 1.2) return 0.0f;  // too few cells across the pattern
+    // Quick test: opposite quarters alike and unlike their neighbours along the axes or the
+    // diagonals (one of the two sets lies inside the squares whatever the pattern's angle).
+    const double ar = std::min(rr, 24.0), ac = std::min(rc, 24.0), dr2 = 0.7071 * ar, dc2 = 0.7071 * ac;
+    const float axes = std::abs(g.pano.Sample(r, c + ac) + g.pano.Sample(r, c - ac) - g.pano.Sample(r + ar, c) - g.pano.Sample(r - ar, c));
+    const float diagonals = std::abs(g.pano.Sample(r + dr2, c + dc2) + g.pano.Sample(r - dr2, c - dc2) -
+                                     g.pano.Sample(r + dr2, c - dc2) - g.pano.Sample(r - dr2, c + dc2));
+    if (!(axes >= quick) && !(diagonals >= quick)) return 0.0f;
+    // The centre may fall between cells: the best of the response at the cell and at the
+    // half-cell offsets (on a coarse grid an edge through the ring's centre decides it).
+    double best = -INFINITY;
+    for (const auto& [or_, oc] : {std::pair{0.0, 0.0}, {0.5, 0.0}, {0.0, 0.5}, {0.5, 0.5}}) {
+      const double cr = r + or_, cc = c + oc;
+      std::array<float, 16> ringv;
+      bool ok = true;
+      for (int k = 0; k < 16 && ok; ++k) {
+        const double a = k * M_PI / 8;
+        ringv[k] = g.pano.Sample(cr + ar * std::sin(a), cc + ac * std::cos(a));
+        ok = std::isfinite(ringv[k]);
+      }
+      const float centre = 0.25f * (g.pano.Sample(cr - 0.5, cc - 0.5) + g.pano.Sample(cr - 0.5, cc + 0.5) +
+                                    g.pano.Sample(cr + 0.5, cc - 0.5) + g.pano.Sample(cr + 0.5, cc + 0.5));
+      if (ok && std::isfinite(centre)) best = std::max(best, ChessResponse(ringv, centre));
+    }
+  return std::isfinite(best) ? static_cast<float>(best) : 0.0f;
 }
 
 struct BoardSample {
@@ -108,6 +158,127 @@ double FitPattern(const std::vector<BoardSample>& samples, Params* p, Eigen::Mat
   return ssr;
 }
 
+// The board at cell (r0, c0): its plane from the cells on the pattern, then the pattern model
+// fitted to the reflectance where their lines of sight meet the plane; none when a check fails.
+std::optional<DetectedChecker> FitAt(const Grid& g, int r0, int c0, const CheckerTargetOptions& o) {
+  const double size = o.size_m;
+  const Eigen::Vector3d p0 = g.scan.Point(r0, c0).cast<double>();
+  const double range = p0.norm();
+  // The cells on the pattern (the square's inscribed circle, less the candidate's noise): the
+  // plane from the board alone, not the wall it may stand a little in front of.
+  const int wc = static_cast<int>(std::ceil(0.5 * size / (range * g.dc))), wr = static_cast<int>(std::ceil(0.5 * size / (range * g.dr)));
+  std::vector<std::array<int, 2>> cells;
+  for (int r = std::max(0, r0 - wr); r <= std::min(g.scan.rows - 1, r0 + wr); ++r)
+    for (int dcol = -wc; dcol <= wc; ++dcol) {
+      int c = c0 + dcol;
+      if (g.pano.wraps) c = (c % g.scan.cols + g.scan.cols) % g.scan.cols;
+      if (c < 0 || c >= g.scan.cols || !g.scan.IsValid(r, c)) continue;
+      if ((g.scan.Point(r, c).cast<double>() - p0).norm() < 0.45 * size) cells.push_back({r, c});
+    }
+  if (static_cast<int>(cells.size()) < o.min_points) return std::nullopt;
+  // The plane, twice refitted without the points beyond 3 RMS (a pole, a leaf, a mixed pixel).
+  std::vector<char> in(cells.size(), 1);
+  Eigen::Vector3d centroid, normal;
+  double rms = 0;
+  int used = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    centroid.setZero();
+    used = 0;
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      if (in[i]) centroid += g.scan.Point(cells[i][0], cells[i][1]).cast<double>(), ++used;
+    if (used < o.min_points) break;
+    centroid /= used;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      if (in[i]) {
+        const Eigen::Vector3d d = g.scan.Point(cells[i][0], cells[i][1]).cast<double>() - centroid;
+        cov += d * d.transpose();
+      }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / used);
+    normal = eig.eigenvectors().col(0);
+    rms = std::sqrt(std::max(eig.eigenvalues()[0], 0.0));
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      in[i] = std::abs(normal.dot(g.scan.Point(cells[i][0], cells[i][1]).cast<double>() - centroid)) <=
+              3.0 * std::max(rms, 1e-4);
+  }
+  if (used < o.min_points || rms > o.max_plane_rms_m) return std::nullopt;
+  if (normal.dot(centroid) > 0) normal = -normal;  // towards the scanner
+  const Eigen::Vector3d ray0 = p0.normalized();
+  const double cos0 = -normal.dot(ray0);
+  if (cos0 < 0.2) return std::nullopt;  // grazing: the board is too foreshortened to place
+  const double offset = normal.dot(centroid);
+  const Eigen::Vector3d q0 = ray0 * (offset / normal.dot(ray0));
+  Eigen::Vector3d e1 = Eigen::Vector3d::UnitZ().cross(normal);
+  if (e1.norm() < 0.1) e1 = Eigen::Vector3d::UnitX().cross(normal);
+  e1.normalize();
+  const Eigen::Vector3d e2 = normal.cross(e1);
+  // Board samples: each line of sight meets the plane; only cells inside the pattern and on the plane.
+  std::vector<BoardSample> samples;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (!in[i]) continue;
+    const Eigen::Vector3d d = g.scan.Point(cells[i][0], cells[i][1]).cast<double>().normalized();
+    const Eigen::Vector3d x = d * (offset / normal.dot(d)) - q0;
+    const double u = x.dot(e1), v = x.dot(e2);
+    if (std::hypot(u, v) <= 0.4 * size) samples.push_back({u, v, g.scan.Reflectance(cells[i][0], cells[i][1])});
+  }
+  if (static_cast<int>(samples.size()) < o.min_points) return std::nullopt;
+  double mean = 0;
+  for (const BoardSample& b : samples) mean += b.value;
+  mean /= samples.size();
+  const double footprint = std::max(0.5 * range * g.dc / cos0, 0.01 * size);
+  Params best;
+  double best_ssr = INFINITY;
+  Eigen::Matrix<double, 6, 6> best_normal;
+  for (int k = 0; k < 4; ++k) {
+    Params p;
+    p << 0, 0, k * M_PI / 8, mean, 0, std::log(footprint);
+    double b = 0;
+    for (const BoardSample& s : samples) {
+      const double c = std::cos(p[2]), sn = std::sin(p[2]);
+      const double x = s.u * c + s.v * sn, y = -s.u * sn + s.v * c;
+      b += (s.value - mean) * (x * y > 0 ? 1 : -1);
+    }
+    p[4] = b / samples.size();
+    Eigen::Matrix<double, 6, 6> normal_matrix;
+    const double ssr = FitPattern(samples, &p, &normal_matrix);
+    if (ssr < best_ssr) best_ssr = ssr, best = p, best_normal = normal_matrix;
+  }
+  if (!std::isfinite(best_ssr)) return std::nullopt;
+  const double contrast = 2 * std::abs(best[4]), s_edge = std::exp(best[5]);
+  const int n = static_cast<int>(samples.size());
+  const double fit_rms = std::sqrt(best_ssr / n);
+  if (contrast < o.min_contrast || fit_rms > 0.15 * contrast) return std::nullopt;
+  if (std::hypot(best[0], best[1]) > 0.15 * size || s_edge > 0.2 * size) return std::nullopt;
+  // Four alternating quarters, each seen clear of the edges.
+  std::array<int, 4> count{}, agree{};
+  for (const BoardSample& s : samples) {
+    const double c = std::cos(best[2]), sn = std::sin(best[2]);
+    const double du = s.u - best[0], dv = s.v - best[1];
+    const double x = du * c + dv * sn, y = -du * sn + dv * c;
+    if (std::abs(x) < s_edge || std::abs(y) < s_edge) continue;
+    const int q = (x > 0 ? 1 : 0) + (y > 0 ? 2 : 0);
+    ++count[q];
+    agree[q] += ((s.value - best[3]) * best[4] * (x * y > 0 ? 1 : -1)) > 0.5 * best[4] * best[4];
+  }
+  bool quarters = true;
+  for (int q = 0; q < 4; ++q) quarters = quarters && count[q] >= 1 && agree[q] >= 0.8 * count[q];
+  if (!quarters) return std::nullopt;
+  const Eigen::Matrix<double, 6, 6> cov = best_normal.inverse() * (best_ssr / std::max(1, n - 6));
+  if (!cov.allFinite()) return std::nullopt;
+  const double sigma_in_plane = std::sqrt(std::max(cov.topLeftCorner<2, 2>().eigenvalues().real().maxCoeff(), 0.0));
+  const double sigma_across = rms / std::sqrt(static_cast<double>(used)) / cos0;  // along the line of sight
+  const double sigma = std::hypot(sigma_in_plane, sigma_across);
+  if (sigma > o.max_sigma_m) return std::nullopt;
+  DetectedChecker d;
+  d.center = q0 + best[0] * e1 + best[1] * e2;
+  d.normal = normal;
+  d.sigma_m = sigma;
+  d.contrast = contrast;
+  d.rms = fit_rms;
+  d.points = n;
+  return d;
+}
+
 }  // namespace
 
 Status CheckerTargetOptions::Validate() const {
@@ -121,6 +292,23 @@ Status CheckerTargetOptions::Validate() const {
   return Status::Ok();
 }
 
+std::optional<DetectedChecker> FitCheckerTargetAt(const Scan& scan, int row, int col, int search_cells,
+                                                  const CheckerTargetOptions& o) {
+  if (!o.Validate() || scan.rows < 5 || scan.cols < 5) return std::nullopt;
+  const std::optional<Grid> grid = MakeGrid(scan);
+  if (!grid) return std::nullopt;
+  // Start from the strongest response near the click (a click is rarely on the centre's cell).
+  float best = 0;
+  int br = row, bc = col;
+  for (int r = std::max(0, row - search_cells); r <= std::min(scan.rows - 1, row + search_cells); ++r)
+    for (int c = std::max(0, col - search_cells); c <= std::min(scan.cols - 1, col + search_cells); ++c) {
+      const float v = Response(*grid, r, c, o);
+      if (v > best) best = v, br = r, bc = c;
+    }
+  if (!(best > 0)) return std::nullopt;
+  return FitAt(*grid, br, bc, o);
+}
+
 Expected<std::vector<DetectedChecker>> DetectCheckerTargets(const Scan& scan, const CheckerTargetOptions& o,
                                                             const CancelToken& cancel) {
   if (Status s = o.Validate(); !s) return s.error();
@@ -129,50 +317,17 @@ Expected<std::vector<DetectedChecker>> DetectCheckerTargets(const Scan& scan, co
                                                   "organized scan grid (rows x columns); this scan has " +
                                                       std::to_string(scan.rows) + " x " + std::to_string(scan.cols));
   }
-  double dc = 0, dr = 0;
-  AngularSteps(scan, &dc, &dr);
   std::vector<DetectedChecker> found;
-  if (!(dc > 0) || !(dr > 0)) return found;
-  const Panorama pano{scan, scan.cols * dc > 2 * M_PI * 0.99};
+  const std::optional<Grid> grid = MakeGrid(scan);
+  if (!grid) return found;
   const double size = o.size_m;
 
   // 1. ChESS response on a ring of 0.3 of the pattern's size; local maxima above the threshold.
   std::vector<float> response(scan.size(), 0.0f);
-  const float quick = static_cast<float>(o.min_contrast);
 #pragma omp parallel for schedule(dynamic, 8)
   for (int r = 0; r < scan.rows; ++r) {
     if (cancel.IsCancelled()) continue;
-    for (int c = 0; c < scan.cols; ++c) {
-      if (!scan.IsValid(r, c)) continue;
-      const double range = scan.Point(r, c).norm();
-      if (range > o.max_range_m || range < 0.5 * size) continue;
-      const double ring = 0.3 * size / range, rc = ring / dc, rr = ring / dr;
-      if (std::min(rc, rr) < 1.2) continue;  // too few cells across the pattern
-      // Quick test: opposite quarters alike and unlike their neighbours along the axes or the
-      // diagonals (one of the two sets lies inside the squares whatever the pattern's angle).
-      const double ar = std::min(rr, 24.0), ac = std::min(rc, 24.0), dr2 = 0.7071 * ar, dc2 = 0.7071 * ac;
-      const float axes = std::abs(pano.Sample(r, c + ac) + pano.Sample(r, c - ac) - pano.Sample(r + ar, c) - pano.Sample(r - ar, c));
-      const float diagonals = std::abs(pano.Sample(r + dr2, c + dc2) + pano.Sample(r - dr2, c - dc2) -
-                                       pano.Sample(r + dr2, c - dc2) - pano.Sample(r - dr2, c + dc2));
-      if (!(axes >= quick) && !(diagonals >= quick)) continue;
-      // The centre may fall between cells: the best of the response at the cell and at the
-      // half-cell offsets (on a coarse grid an edge through the ring's centre decides it).
-      double best = -INFINITY;
-      for (const auto& [or_, oc] : {std::pair{0.0, 0.0}, {0.5, 0.0}, {0.0, 0.5}, {0.5, 0.5}}) {
-        const double cr = r + or_, cc = c + oc;
-        std::array<float, 16> ringv;
-        bool ok = true;
-        for (int k = 0; k < 16 && ok; ++k) {
-          const double a = k * M_PI / 8;
-          ringv[k] = pano.Sample(cr + ar * std::sin(a), cc + ac * std::cos(a));
-          ok = std::isfinite(ringv[k]);
-        }
-        const float centre = 0.25f * (pano.Sample(cr - 0.5, cc - 0.5) + pano.Sample(cr - 0.5, cc + 0.5) +
-                                      pano.Sample(cr + 0.5, cc - 0.5) + pano.Sample(cr + 0.5, cc + 0.5));
-        if (ok && std::isfinite(centre)) best = std::max(best, ChessResponse(ringv, centre));
-      }
-      if (std::isfinite(best)) response[scan.Index(r, c)] = static_cast<float>(best);
-    }
+    for (int c = 0; c < scan.cols; ++c) response[scan.Index(r, c)] = Response(*grid, r, c, o);
   }
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "target search cancelled");
   const double threshold = 4.0 * o.min_contrast;
@@ -197,123 +352,10 @@ Expected<std::vector<DetectedChecker>> DetectCheckerTargets(const Scan& scan, co
   // 2-3. Plane and pattern fit round each candidate.
   for (const auto& [score, index] : candidates) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "target search cancelled");
-    const int r0 = static_cast<int>(index / scan.cols), c0 = static_cast<int>(index % scan.cols);
-    const Eigen::Vector3d p0 = scan.Point(r0, c0).cast<double>();
-    const double range = p0.norm();
-    // The cells on the pattern (the square's inscribed circle, less the candidate's noise): the
-    // plane from the board alone, not the wall it may stand a little in front of.
-    const int wc = static_cast<int>(std::ceil(0.5 * size / (range * dc))), wr = static_cast<int>(std::ceil(0.5 * size / (range * dr)));
-    std::vector<std::array<int, 2>> cells;
-    for (int r = std::max(0, r0 - wr); r <= std::min(scan.rows - 1, r0 + wr); ++r)
-      for (int dcol = -wc; dcol <= wc; ++dcol) {
-        int c = c0 + dcol;
-        if (pano.wraps) c = (c % scan.cols + scan.cols) % scan.cols;
-        if (c < 0 || c >= scan.cols || !scan.IsValid(r, c)) continue;
-        if ((scan.Point(r, c).cast<double>() - p0).norm() < 0.45 * size) cells.push_back({r, c});
-      }
-    if (static_cast<int>(cells.size()) < o.min_points) continue;
-    // The plane, twice refitted without the points beyond 3 RMS (a pole, a leaf, a mixed pixel).
-    std::vector<char> in(cells.size(), 1);
-    Eigen::Vector3d centroid, normal;
-    double rms = 0;
-    int used = 0;
-    for (int pass = 0; pass < 3; ++pass) {
-      centroid.setZero();
-      used = 0;
-      for (std::size_t i = 0; i < cells.size(); ++i)
-        if (in[i]) centroid += scan.Point(cells[i][0], cells[i][1]).cast<double>(), ++used;
-      if (used < o.min_points) break;
-      centroid /= used;
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (std::size_t i = 0; i < cells.size(); ++i)
-        if (in[i]) {
-          const Eigen::Vector3d d = scan.Point(cells[i][0], cells[i][1]).cast<double>() - centroid;
-          cov += d * d.transpose();
-        }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov / used);
-      normal = eig.eigenvectors().col(0);
-      rms = std::sqrt(std::max(eig.eigenvalues()[0], 0.0));
-      for (std::size_t i = 0; i < cells.size(); ++i)
-        in[i] = std::abs(normal.dot(scan.Point(cells[i][0], cells[i][1]).cast<double>() - centroid)) <=
-                3.0 * std::max(rms, 1e-4);
-    }
-    if (used < o.min_points || rms > o.max_plane_rms_m) continue;
-    if (normal.dot(centroid) > 0) normal = -normal;  // towards the scanner
-    const Eigen::Vector3d ray0 = p0.normalized();
-    const double cos0 = -normal.dot(ray0);
-    if (cos0 < 0.2) continue;  // grazing: the board is too foreshortened to place
-    const double offset = normal.dot(centroid);
-    const Eigen::Vector3d q0 = ray0 * (offset / normal.dot(ray0));
-    Eigen::Vector3d e1 = Eigen::Vector3d::UnitZ().cross(normal);
-    if (e1.norm() < 0.1) e1 = Eigen::Vector3d::UnitX().cross(normal);
-    e1.normalize();
-    const Eigen::Vector3d e2 = normal.cross(e1);
-    // Board samples: each line of sight meets the plane; only cells inside the pattern and on the plane.
-    std::vector<BoardSample> samples;
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-      if (!in[i]) continue;
-      const Eigen::Vector3d d = scan.Point(cells[i][0], cells[i][1]).cast<double>().normalized();
-      const Eigen::Vector3d x = d * (offset / normal.dot(d)) - q0;
-      const double u = x.dot(e1), v = x.dot(e2);
-      if (std::hypot(u, v) <= 0.4 * size) samples.push_back({u, v, scan.Reflectance(cells[i][0], cells[i][1])});
-    }
-    if (static_cast<int>(samples.size()) < o.min_points) continue;
-    double mean = 0;
-    for (const BoardSample& b : samples) mean += b.value;
-    mean /= samples.size();
-    const double footprint = std::max(0.5 * range * dc / cos0, 0.01 * size);
-    Params best;
-    double best_ssr = INFINITY;
-    Eigen::Matrix<double, 6, 6> best_normal;
-    for (int k = 0; k < 4; ++k) {
-      Params p;
-      p << 0, 0, k * M_PI / 8, mean, 0, std::log(footprint);
-      double b = 0;
-      for (const BoardSample& s : samples) {
-        const double c = std::cos(p[2]), sn = std::sin(p[2]);
-        const double x = s.u * c + s.v * sn, y = -s.u * sn + s.v * c;
-        b += (s.value - mean) * (x * y > 0 ? 1 : -1);
-      }
-      p[4] = b / samples.size();
-      Eigen::Matrix<double, 6, 6> normal_matrix;
-      const double ssr = FitPattern(samples, &p, &normal_matrix);
-      if (ssr < best_ssr) best_ssr = ssr, best = p, best_normal = normal_matrix;
-    }
-    if (!std::isfinite(best_ssr)) continue;
-    const double contrast = 2 * std::abs(best[4]), s_edge = std::exp(best[5]);
-    const int n = static_cast<int>(samples.size());
-    const double fit_rms = std::sqrt(best_ssr / n);
-    if (contrast < o.min_contrast || fit_rms > 0.15 * contrast) continue;
-    if (std::hypot(best[0], best[1]) > 0.15 * size || s_edge > 0.2 * size) continue;
-    // Four alternating quarters, each seen clear of the edges.
-    std::array<int, 4> count{}, agree{};
-    for (const BoardSample& s : samples) {
-      const double c = std::cos(best[2]), sn = std::sin(best[2]);
-      const double du = s.u - best[0], dv = s.v - best[1];
-      const double x = du * c + dv * sn, y = -du * sn + dv * c;
-      if (std::abs(x) < 1.5 * s_edge || std::abs(y) < 1.5 * s_edge) continue;
-      const int q = (x > 0 ? 1 : 0) + (y > 0 ? 2 : 0);
-      ++count[q];
-      agree[q] += ((s.value - best[3]) * best[4] * (x * y > 0 ? 1 : -1)) > 0.5 * best[4] * best[4];
-    }
-    bool quarters = true;
-    const int fewest = *std::min_element(count.begin(), count.end()), most = *std::max_element(count.begin(), count.end());
-    for (int q = 0; q < 4; ++q) quarters = quarters && count[q] >= 2 && agree[q] >= 0.9 * count[q];
-    quarters = quarters && fewest >= 0.3 * most;  // the centre inside the cells, not at their edge
-    if (!quarters) continue;
-    const Eigen::Matrix<double, 6, 6> cov = best_normal.inverse() * (best_ssr / std::max(1, n - 6));
-    if (!cov.allFinite()) continue;
-    const double sigma_in_plane = std::sqrt(std::max(cov.topLeftCorner<2, 2>().eigenvalues().real().maxCoeff(), 0.0));
-    const double sigma_across = rms / std::sqrt(static_cast<double>(used)) / cos0;  // along the line of sight
-    const double sigma = std::hypot(sigma_in_plane, sigma_across);
-    if (sigma > o.max_sigma_m) continue;
-    DetectedChecker d;
-    d.center = q0 + best[0] * e1 + best[1] * e2;
-    d.normal = normal;
-    d.sigma_m = sigma;
-    d.contrast = contrast;
-    d.rms = fit_rms;
-    d.points = n;
+    const std::optional<DetectedChecker> fit =
+        FitAt(*grid, static_cast<int>(index / scan.cols), static_cast<int>(index % scan.cols), o);
+    if (!fit) continue;
+    const DetectedChecker& d = *fit;
     bool duplicate = false;
     for (DetectedChecker& k : found) {
       if ((k.center - d.center).norm() < 0.5 * size) {

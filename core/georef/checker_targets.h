@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -49,5 +50,10 @@ struct DetectedChecker {
 // reflectance has none). Errors: bad options, a scan that is not an organized grid, cancel.
 Expected<std::vector<DetectedChecker>> DetectCheckerTargets(const Scan& scan, const CheckerTargetOptions& options,
                                                             const CancelToken& cancel);
+
+// The board nearest a cell the user clicked: the strongest checker response within search_cells of
+// (row, col), then the fit above. None when no board passes there.
+std::optional<DetectedChecker> FitCheckerTargetAt(const Scan& scan, int row, int col, int search_cells,
+                                                  const CheckerTargetOptions& options);
 
 }  // namespace scanreg::georef

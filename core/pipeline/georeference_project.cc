@@ -1,5 +1,6 @@
 #include "core/pipeline/georeference_project.h"
 
+#include <algorithm>
 #include <map>
 
 #include "core/common/log.h"
@@ -69,6 +70,11 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
     }
     for (io::TargetRecord& t : found) {
       t.scan = scan.name;
+      // The user picked this one: the pick stands for it (one observation, the user's name).
+      const bool picked = std::any_of(targets.begin(), targets.end(), [&](const io::TargetRecord& p) {
+        return p.kind == "picked" && p.scan == t.scan && (p.center - t.center).norm() < 0.05;
+      });
+      if (picked) continue;
       // A name the user gave a target of this scan before stays with it.
       for (const io::TargetRecord& old : project.targets)
         if (old.named_by_user && old.kind == t.kind && old.scan == t.scan && (old.center - t.center).norm() < 0.02)

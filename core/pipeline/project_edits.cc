@@ -264,4 +264,26 @@ Status ImportControl(const std::filesystem::path& file, const std::vector<std::s
   return Status::Ok();
 }
 
+Status AddPickedTarget(io::Project& project, const io::TargetRecord& target) {
+  if (project.FindScan(target.scan) < 0)
+    return MakeError(ErrorCode::kNotFound, "pick a target: no scan '" + target.scan + "' in the project");
+  if (!target.center.allFinite() || !(target.sigma_m > 0))
+    return MakeError(ErrorCode::kInvalidArgument, "pick a target in " + target.scan + ": the centre is not a point");
+  if (target.name.find_first_of(",\r\n") != std::string::npos)
+    return MakeError(ErrorCode::kInvalidArgument, "target name '" + target.name + "' holds a comma or a line break");
+  io::TargetRecord t = target;
+  t.kind = "picked";
+  t.named_by_user = !t.name.empty();
+  t.residual_m = -1;
+  auto& targets = project.targets;
+  targets.erase(std::remove_if(targets.begin(), targets.end(),
+                               [&](const io::TargetRecord& old) {
+                                 return old.kind == "picked" && old.scan == t.scan &&
+                                        ((!t.name.empty() && old.name == t.name) || (old.center - t.center).norm() < 0.02);
+                               }),
+                targets.end());
+  targets.push_back(t);
+  return Status::Ok();
+}
+
 }  // namespace scanreg::pipeline

@@ -73,4 +73,10 @@ Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector
 Status ImportControl(const std::filesystem::path& file, const std::vector<std::string>& check_points,
                      io::Project& project);
 
+// A target the user picked in a scan (kind "picked"; a name ties it to the control point of that
+// name): replaces the scan's earlier pick of the same name or within 2 cm. Kept through every later
+// registration and used by the next georeferencing. Errors: an unknown scan, a centre not finite,
+// a name with a comma or a line break (control files are CSV).
+Status AddPickedTarget(io::Project& project, const io::TargetRecord& target);
+
 }  // namespace scanreg::pipeline

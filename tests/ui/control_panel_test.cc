@@ -15,8 +15,12 @@
 #include <vtkMapper.h>
 #include <vtkPolyData.h>
 
+#include <QPushButton>
+
+#include "core/simulate/project_sim.h"
 #include "ui/control_panel.h"
 #include "ui/main_window.h"
+#include "ui/pick_target_dialog.h"
 #include "ui/scan_cloud_actors.h"
 
 using scanreg::test::WaitForJob;
@@ -125,6 +129,89 @@ class ControlPanelTest : public QObject {
     QCOMPARE(static_cast<int>(window.project().control.size()), 4);
     QVERIFY(window.project().georef.has_value());
     QCOMPARE(table->rowCount(), 4);
+  }
+
+  // Registration → Pick a target in scan…: a click a few pixels off a checkerboard on a façade
+  // adds a target at the board's centre (the fit, not the click), named after a control point;
+  // undo removes it. Then the project, registered, is georeferenced on control without
+  // registering again, and the picked target is among the used ones.
+  void PickingATargetAddsIt() {
+    QTemporaryDir dir;
+    scanreg::SimulatedProjectOptions sim;
+    sim.stations = 2;
+    sim.checker_targets = 6;
+    scanreg::NullProgress progress;
+    auto written = scanreg::pipeline::WriteSimulatedProject(sim, dir.filePath("p").toStdString(), progress,
+                                                           scanreg::CancelToken());
+    QVERIFY(written.ok());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(QString::fromStdString(written->file.string())));
+    QVERIFY(WaitForJob(window, 120000));
+    QVERIFY(window.ImportControl(QString::fromStdString((written->file.parent_path() / "control.csv").string())));
+
+    // The nearest board s01 sees (not behind a car or a tree), and the pixel it shows at (column:
+    // azimuth, row: elevation).
+    const scanreg::io::ProjectScan& s01 = window.project().scans[0];
+    QVERIFY(s01.reference_world_from_scan.has_value());
+    const Eigen::Isometry3d scan_from_world = s01.reference_world_from_scan->inverse();
+    const scanreg::Scan& scan = window.scans()[0];
+    auto pixel_of = [&](const Eigen::Vector3d& p) {
+      const double az = std::atan2(p.y(), p.x()), el = std::asin(p.z() / p.norm());
+      const double col = (az + M_PI) / (2 * M_PI / sim.scanner.cols) - 0.5;
+      const double el_step = (sim.scanner.elevation_max_deg - sim.scanner.elevation_min_deg) * M_PI / 180 / sim.scanner.rows;
+      return QPointF(col, (sim.scanner.elevation_max_deg * M_PI / 180 - el) / el_step - 0.5);
+    };
+    const scanreg::SimulatedTarget* nearest = nullptr;
+    Eigen::Vector3d truth;
+    const std::vector<scanreg::SimulatedTarget> boards = scanreg::SimulatedTargets(sim);
+    for (const scanreg::SimulatedTarget& t : boards) {
+      const Eigen::Vector3d p = scan_from_world * t.world;
+      const QPointF px = pixel_of(p);
+      const int r = static_cast<int>(std::lround(px.y())), c = static_cast<int>(std::lround(px.x()));
+      if (r < 0 || r >= scan.rows || c < 0 || c >= scan.cols || !scan.IsValid(r, c)) continue;
+      if ((scan.Point(r, c).cast<double>() - p).norm() > 0.1 || p.norm() > 15.0) continue;  // hidden or far
+      if (!nearest || p.norm() < truth.norm()) nearest = &t, truth = p;
+    }
+    QVERIFY2(nearest != nullptr, "no board in view of s01");
+    const double col = pixel_of(truth).x(), row = pixel_of(truth).y();
+
+    scanreg::ui::PickTargetDialog* dialog = window.PickTarget("s01");
+    QVERIFY(dialog != nullptr);
+    QVERIFY(dialog->Pick(QPointF(col + 2.5, row - 1.5)));  // a little off, as a hand is
+    QVERIFY2(dialog->Status().contains("Checkerboard"), qPrintable(dialog->Status()));
+    dialog->SetName(QString::fromStdString(nearest->name));
+    auto picked = dialog->Target();
+    QVERIFY(picked.has_value());
+    QCOMPARE(picked->name, nearest->name);
+    QVERIFY2((picked->center - truth).norm() < 0.004,
+             qPrintable(QString("%1 mm off").arg((picked->center - truth).norm() * 1000)));
+    QTest::mouseClick(dialog->addButton(), Qt::LeftButton);
+    auto is_pick = [&](const scanreg::io::TargetRecord& t) {
+      return t.kind == "picked" && t.scan == "s01" && t.name == nearest->name && t.named_by_user &&
+             (t.center - truth).norm() < 0.004;
+    };
+    const auto& after = window.project().targets;
+    QVERIFY(std::count_if(after.begin(), after.end(), is_pick) == 1);
+    window.undoStack()->undo();
+    QVERIFY(std::none_of(window.project().targets.begin(), window.project().targets.end(), is_pick));
+    window.undoStack()->redo();
+
+    // Register, then georeference again on its own: the pick is used and kept.
+    QVERIFY(window.RegisterProject());
+    QVERIFY(WaitForJob(window, 300000));
+    QVERIFY(window.Georeference());
+    QVERIFY(WaitForJob(window, 120000));
+    const scanreg::io::Project& placed = window.project();
+    QVERIFY(placed.georef.has_value());
+    const auto kept = std::find_if(placed.targets.begin(), placed.targets.end(), [&](const auto& t) {
+      return t.kind == "picked" && t.name == nearest->name;
+    });
+    QVERIFY(kept != placed.targets.end());
+    QVERIFY2(kept->residual_m >= 0 && kept->residual_m < 0.01, qPrintable(QString::number(kept->residual_m)));
+    bool used = false;
+    for (const auto& row : placed.georef->control) used = used || (row.name == nearest->name && row.role == "used");
+    QVERIFY(used);
   }
 };
 
