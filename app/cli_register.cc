@@ -226,7 +226,8 @@ int RunRegister(const std::vector<std::string>& argv) {
         "METRES   control residual tolerance: green below half, orange up to it, red beyond (default 0.01)"},
        {"levelled", true, false,
         "DEG      the scans are levelled (tilt compensator) to this accuracy, a constraint of the "
-        "georeferencing (default 0: not levelled)"}},
+        "georeferencing; a scan whose file carried a pose is levelled through that pose's vertical "
+        "(default 0: not levelled)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {

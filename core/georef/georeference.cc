@@ -41,19 +41,21 @@ struct ControlCost {
   double s;
 };
 
-// A levelled scan (tilt compensator, or the project setting): its vertical is the control frame's,
-// within sigma (radians): the horizontal part of R e_z over sigma.
+// A levelled scan (tilt compensator, or the project setting): its vertical `u` (in its own frame:
+// its z axis, or what the file's pose says) is the control frame's, within sigma (radians): the
+// horizontal part of R u over sigma.
 struct LevelCost {
-  explicit LevelCost(double sigma) : s(sigma) {}
+  LevelCost(double sigma, const Eigen::Vector3d& up) : s(sigma), u(up.normalized()) {}
   template <typename T>
   bool operator()(const T* q_, T* r) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q(q_);
-    const Eigen::Matrix<T, 3, 1> up = q * Eigen::Matrix<T, 3, 1>(T(0), T(0), T(1));
+    const Eigen::Matrix<T, 3, 1> up = q * u.cast<T>();
     r[0] = up.x() / T(s);
     r[1] = up.y() / T(s);
     return true;
   }
   double s;
+  Eigen::Vector3d u;
 };
 
 // A pull of a scan to where the registration put it (moved with the datum). Weak (metre / 0.1 rad)
@@ -126,9 +128,9 @@ std::vector<Target> GroupTargets(const std::vector<Eigen::Vector3d>& world, cons
 // points with matching sides, the rigid motion under which the most targets land within tol of a
 // control point (ties broken by the smaller sum of distances). When another motion ties as many
 // targets to other control points, the constellation is symmetric: nothing is tied and the reason
-// is returned (the user names one target).
+// is returned (the user names one target). up: the vertical in the registration frame.
 std::string MatchConstellation(std::vector<Target>& targets, const std::vector<io::ControlPoint>& control,
-                        const Eigen::Vector3d& origin, double tol, double max_tilt_rad) {
+                        const Eigen::Vector3d& origin, double tol, double max_tilt_rad, const Eigen::Vector3d& up) {
   std::vector<bool> taken(control.size(), false);
   for (const Target& t : targets)
     if (t.control >= 0) taken[t.control] = true;
@@ -172,7 +174,7 @@ std::string MatchConstellation(std::vector<Target>& targets, const std::vector<i
   bool rival = false;  // another assignment ties as many targets
   auto consider = [&](const Eigen::Isometry3d& T) {
     // A motion that tips the vertical over is the constellation's mirror image, not the survey.
-    if (std::acos(std::clamp(T.linear()(2, 2), -1.0, 1.0)) > max_tilt_rad) return;
+    if (std::acos(std::clamp((T.linear() * up).z(), -1.0, 1.0)) > max_tilt_rad) return;
     for (std::size_t i = 0; i < a.size(); ++i)  // targets the user named must land on their points
       if ((T * a[i] - b[i]).norm() > tol) return;
     std::vector<int> match;
@@ -232,6 +234,7 @@ struct Adjustment {
   const GeorefOptions* options = nullptr;
   std::vector<Eigen::Isometry3d> start;   // scan poses, local frame
   std::vector<bool> held;                 // scans kept as placed
+  std::vector<Eigen::Vector3d> up_in_scan;  // levelled scans' verticals in their own frames (empty: z)
   std::vector<Eigen::Vector3d> start_x;   // target positions, local frame
   std::vector<int> target_of_obs;         // observation -> target
   std::vector<int> target_of_control;     // control point -> target (-1: none)
@@ -264,8 +267,12 @@ struct Adjustment {
                                s.q[i].coeffs().data(), s.t[i].data());
       problem.SetManifold(s.q[i].coeffs().data(), new ceres::EigenQuaternionManifold);
       if (o.levelled_sigma_rad > 0) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LevelCost, 2, 4>(new LevelCost(o.levelled_sigma_rad)),
-                                 nullptr, s.q[i].coeffs().data());
+        const Eigen::Vector3d up = i < static_cast<int>(up_in_scan.size()) && up_in_scan[i].norm() > 0.5
+                                       ? up_in_scan[i]
+                                       : Eigen::Vector3d::UnitZ();
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<LevelCost, 2, 4>(new LevelCost(o.levelled_sigma_rad, up)), nullptr,
+            s.q[i].coeffs().data());
       }
     }
     for (const ScanLink& l : *links) {
@@ -366,7 +373,8 @@ Status GeorefOptions::Validate() const {
 Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& poses, const std::vector<ScanLink>& links,
                                     const std::vector<TargetObservation>& observations,
                                     const std::vector<io::ControlPoint>& control, const GeorefOptions& o,
-                                    const CancelToken& cancel, const std::vector<bool>& held) {
+                                    const CancelToken& cancel, const std::vector<bool>& held,
+                                    const std::vector<Eigen::Vector3d>& up_in_scan) {
   if (Status s = o.Validate(); !s) return s.error();
   const int n_scans = static_cast<int>(poses.size());
   for (const TargetObservation& ob : observations)
@@ -390,8 +398,13 @@ Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& poses,
     auto it = control_index.find(t.name);
     if (!t.name.empty() && it != control_index.end()) t.control = it->second;
   }
-  const std::string ambiguity =
-      MatchConstellation(targets, control, origin, o.match_tolerance_m, o.max_tilt_deg * M_PI / 180.0);
+  // The registration frame's vertical: the first scan's, as its file's pose gives it when it does.
+  const Eigen::Vector3d registration_up =
+      poses.empty() ? Eigen::Vector3d::UnitZ() : (poses[0].linear() * (!up_in_scan.empty() && up_in_scan[0].norm() > 0.5 ? up_in_scan[0].normalized()
+                                                                                : Eigen::Vector3d::UnitZ()))
+                                                         .normalized();
+  const std::string ambiguity = MatchConstellation(targets, control, origin, o.match_tolerance_m,
+                                                   o.max_tilt_deg * M_PI / 180.0, registration_up);
 
   // 3. Roles and blunders.
   GeorefResult result;
@@ -444,6 +457,7 @@ Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& poses,
   adj.options = &o;
   adj.control_local = to;
   adj.held = held;
+  adj.up_in_scan = up_in_scan;
   adj.target_of_control = target_of;
   for (int i = 0; i < n_scans; ++i) adj.start.push_back(*local_from_world * poses[i]);
   for (const Target& t : targets) adj.start_x.push_back(*local_from_world * t.world);

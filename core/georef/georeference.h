@@ -49,9 +49,10 @@ struct GeorefOptions {
   // rotations to the links, so they must not be held looser than they are.
   double link_translation_sigma_m = 0.002;
   double link_rotation_sigma_rad = 1e-4;
-  // Levelled scans (item 3): each scan's vertical is the control frame's within this (radians), as a
-  // tilt compensator gives (a few arc seconds to 0.01°). 0: not levelled; then the control points'
-  // spread alone fixes the tilt (σ / spread: 2 mm over a 5 m wide street is 0.02°).
+  // Levelled scans (item 3): each scan's vertical (its z axis, or the file pose's, see Georeference)
+  // is the control frame's within this (radians), as a tilt compensator gives (a few arc seconds to
+  // 0.01°). 0: not levelled; then the control points' spread alone fixes the tilt (σ / spread: 2 mm
+  // over a 5 m wide street is 0.02°).
   double levelled_sigma_rad = 0;
   double tolerance_m = 0.01;  // control residual tolerance: green < tolerance/2 <= orange <= tolerance < red
   bool detect_blunders = true;
@@ -95,12 +96,15 @@ struct GeorefResult {
 };
 
 // held[i]: scan i is kept as placed relative to the others (a hand placement): it moves with the
-// datum only. Errors: bad options, an observation naming a missing scan, fewer than 3 control
+// datum only. up_in_scan[i]: for levelled scans (options.levelled_sigma_rad), scan i's vertical in
+// its own frame as its file's pose gives it (the tilt compensator's pitch and roll); empty or a
+// zero vector: its z axis. Errors: bad options, an observation naming a missing scan, fewer than 3 control
 // points tied to targets (naming how many were found), control points on one line, cancel.
 Expected<GeorefResult> Georeference(const std::vector<Eigen::Isometry3d>& world_from_scan,
                                     const std::vector<ScanLink>& links,
                                     const std::vector<TargetObservation>& observations,
                                     const std::vector<io::ControlPoint>& control, const GeorefOptions& options,
-                                    const CancelToken& cancel, const std::vector<bool>& held = {});
+                                    const CancelToken& cancel, const std::vector<bool>& held = {},
+                                    const std::vector<Eigen::Vector3d>& up_in_scan = {});
 
 }  // namespace scanreg::georef

@@ -273,6 +273,12 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       scan.manual_pose = s.value("manual_pose", false);
       scan.cluster = s.value("cluster", "");
       scan.imported_pose = s.value("imported_pose", false);
+      if (s.contains("file_up")) {
+        auto up = VecFrom(s["file_up"], label + " file_up");
+        if (!up) return up.error();
+        if (!(up->norm() > 0.5)) return MakeError(ErrorCode::kParseError, label + " file_up: not a direction");
+        scan.file_up = up->normalized();
+      }
       project.scans.push_back(std::move(scan));
     }
     for (const ProjectScan& scan : project.scans) {
@@ -353,6 +359,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
     if (s.manual_pose) js["manual_pose"] = true;
     if (!s.cluster.empty()) js["cluster"] = s.cluster;
     if (s.imported_pose) js["imported_pose"] = true;
+    if (s.file_up) js["file_up"] = Vec(*s.file_up);
     scans.push_back(std::move(js));
   }
   json links = json::array();

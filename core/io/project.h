@@ -71,6 +71,10 @@ struct ProjectScan {
   // registered pose: PTX/E57 header) and is used as it is: `registered` is true, merge and export
   // accept it. Cleared when a registration re-estimates the scan (kept with --keep-imported).
   bool imported_pose = false;
+  // The vertical in the scan's own frame as its file's pose gives it (the tilt compensator's pitch
+  // and roll), when the file (or a pose file) carried a pose; levelled scans are levelled through
+  // it (issue 15, item 3). Kept when a registration re-estimates the pose: it is the file's fact.
+  std::optional<Eigen::Vector3d> file_up;
   // Not registered to the root, but registered to other scans that are not either: the name of the
   // root of that cluster (the scan itself for its root); empty when none. world_from_scan then holds
   // the cluster's own frame (the cluster root's pose), so one link to a registered scan places the

@@ -10,18 +10,6 @@ namespace {
 
 using json = nlohmann::json;
 
-json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-Expected<Eigen::Vector3d> VecFrom(const json& j, const std::string& what) {
-  if (!j.is_array() || j.size() != 3) return MakeError(ErrorCode::kParseError, what + ": expected 3 numbers");
-  Eigen::Vector3d v;
-  for (int k = 0; k < 3; ++k) {
-    if (!j[k].is_number()) return MakeError(ErrorCode::kParseError, what + ": expected 3 numbers");
-    v[k] = j[k].get<double>();
-  }
-  if (!v.allFinite()) return MakeError(ErrorCode::kParseError, what + ": a number is not finite");
-  return v;
-}
 
 Status Finite(double v, const std::string& what) {
   if (std::isfinite(v)) return Status::Ok();

@@ -85,6 +85,7 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
       } else {
         scan.world_from_scan = pose.world_from_scan;
         scan.registered = scan.imported_pose = true;
+        scan.file_up = pose.world_from_scan.linear().transpose() * Eigen::Vector3d::UnitZ();
         scan.unregistered_reason.clear();
       }
       matched = true;
@@ -154,6 +155,7 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
       ps.world_from_scan = scan.world_from_scan;
       // A registered pose in the file's header (another program's registration) is used as it is.
       ps.registered = ps.imported_pose = !scan.world_from_scan.matrix().isIdentity(1e-12);
+      if (ps.imported_pose) ps.file_up = scan.world_from_scan.linear().transpose() * Eigen::Vector3d::UnitZ();
       ps.reference_world_from_scan = scan.reference_world_from_scan;
       scan.name = ps.name;
       result.scans.push_back(std::move(ps));

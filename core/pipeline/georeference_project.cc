@@ -108,8 +108,12 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
   // A scan the user placed by hand keeps that placement relative to the others: it moves with the
   // project into the control frame and nothing else.
   std::vector<bool> held;
-  for (int p : scan_of) held.push_back(project.scans[p].manual_pose);
-  auto result = georef::Georeference(poses, links, observations, project.control, options.georef, cancel, held);
+  std::vector<Eigen::Vector3d> up;  // levelled scans: the file's vertical where it gave one
+  for (int p : scan_of) {
+    held.push_back(project.scans[p].manual_pose);
+    up.push_back(project.scans[p].file_up.value_or(Eigen::Vector3d::UnitZ()));
+  }
+  auto result = georef::Georeference(poses, links, observations, project.control, options.georef, cancel, held, up);
   if (!result) {
     project.targets = targets;  // what was found is worth showing even when it cannot place the project
     return result.error();

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace scanreg::georef {
@@ -132,6 +133,54 @@ TEST(Georeference, UnlevelledScansAreTiltedByTheControlAlone) {
   EXPECT_EQ(r->used, 4);
   EXPECT_LE(r->rms_m, 0.005) << "2 mm per axis is 3.5 mm in 3D";
   ExpectScansWithin(s, *r, 0.015, 0.1);
+}
+
+// Stations tilted by up to 3° whose files give the tilt (the compensator's pitch and roll, to 10"):
+// levelled through each file's vertical they are placed as well as upright ones; taken as upright
+// (the vertical assumed to be each scan's z axis) they are not.
+TEST(Georeference, TiltFromTheFilesPoseLevelsTiltedScans) {
+  Survey s = MakeSurvey(5);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // Tilt every station about its own axes: the truth, links and observations follow.
+  for (Eigen::Isometry3d& t : s.truth) t = t * Pose(0, 0, 0, 0, 0.035 * u(rng), 0.035 * u(rng));
+  s.registered.assign(1, Eigen::Isometry3d::Identity());
+  for (std::size_t i = 0; i + 1 < s.truth.size(); ++i) {
+    s.links[i].parent_from_child = s.truth[i].inverse() * s.truth[i + 1] * Jitter(rng, 0.002, 0.005 * kDeg);
+    s.registered.push_back(s.registered.back() * s.links[i].parent_from_child);
+  }
+  s.observations.clear();
+  for (int i = 0; i < static_cast<int>(s.truth.size()); ++i)
+    for (const Eigen::Vector3d& x : s.targets) {
+      if ((x - s.truth[i].translation()).norm() > 25.0) continue;
+      TargetObservation ob;
+      ob.scan = i;
+      ob.center = s.truth[i].inverse() * x + 0.001 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+      s.observations.push_back(ob);
+    }
+  std::vector<Eigen::Vector3d> up;
+  for (const Eigen::Isometry3d& t : s.truth)
+    up.push_back((t.linear().transpose() * Eigen::Vector3d::UnitZ() + 5e-5 * Eigen::Vector3d(n(rng), n(rng), 0)).normalized());
+  CancelToken cancel;
+  auto r = Georeference(s.registered, s.links, s.observations, s.control, Levelled(), cancel, {}, up);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->used, 4);
+  EXPECT_LE(r->rms_m, 0.003);
+  ExpectScansWithin(s, *r, 0.005, 0.015);
+  for (std::size_t i = 0; i < s.truth.size(); ++i) {  // each vertical: 2.5 sigma of the compensator's 10" per axis
+    const Eigen::Vector3d truth_up = s.truth[i].linear().transpose() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d placed_up = r->world_from_scan[i].linear().transpose() * Eigen::Vector3d::UnitZ();
+    EXPECT_LT(std::acos(std::clamp(truth_up.dot(placed_up), -1.0, 1.0)) / kDeg, 0.01) << "scan " << i;
+  }
+  // The same scans taken as upright: the levelling fights the control and the scans' tilts.
+  auto upright = Georeference(s.registered, s.links, s.observations, s.control, Levelled(), cancel);
+  if (upright.ok()) {
+    double worst = 0;
+    for (std::size_t i = 0; i < s.truth.size(); ++i)
+      worst = std::max(worst, Eigen::AngleAxisd((s.truth[i].inverse() * upright->world_from_scan[i]).linear()).angle());
+    EXPECT_GT(worst / kDeg, 0.1) << "the file's tilt is what levels these scans";
+  }
 }
 
 TEST(Georeference, AControlPointFiveCentimetresOffIsNamedAndNotSpread) {

@@ -52,6 +52,31 @@ TEST(AppendScanFiles, NamesScansUniquelyAndKeepsTheirPoses) {
   EXPECT_NEAR(project.scans[1].world_from_scan.translation().x(), 2.0, 1e-9);
 }
 
+// A tilted scan whose file carries its pose (a compensator's pitch and roll): the project keeps
+// that pose's vertical in the scan's frame, through a save and a registration's new pose.
+TEST(AppendScanFiles, AFilesPoseGivesTheScansVertical) {
+  test::TempDir dir;
+  Scan tilted = PlaneScan("t", 1.0);
+  tilted.world_from_scan.linear() =
+      (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitX())).toRotationMatrix();
+  const auto file = WritePtxFile(dir, "t.ptx", {tilted, PlaneScan("u", 2.0)});
+  io::Project project;
+  NullProgress progress;
+  ASSERT_TRUE(AppendScanFiles(project, {file}, false, progress, CancelToken()).ok());
+  ASSERT_TRUE(project.scans[0].file_up.has_value());
+  const Eigen::Vector3d expect = tilted.world_from_scan.linear().transpose() * Eigen::Vector3d::UnitZ();
+  EXPECT_LT((*project.scans[0].file_up - expect).norm(), 1e-9);
+  EXPECT_NEAR(std::acos(project.scans[0].file_up->z()), 0.03, 1e-9) << "the tilt, not the heading";
+  EXPECT_LT((*project.scans[1].file_up - Eigen::Vector3d::UnitZ()).norm(), 1e-12) << "a pose without tilt: upright";
+  project.file = dir / "p.scanreg.json";
+  project.scans[0].world_from_scan = Eigen::Isometry3d::Identity();  // a registration moved it
+  ASSERT_TRUE(io::SaveProject(project, project.file).ok());
+  auto loaded = io::LoadProject(project.file);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  ASSERT_TRUE(loaded->scans[0].file_up.has_value());
+  EXPECT_LT((*loaded->scans[0].file_up - expect).norm(), 1e-12);
+}
+
 TEST(AppendScanFiles, WithoutKeepingScansReturnsNoneButAppends) {
   test::TempDir dir;
   const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
