@@ -3,6 +3,7 @@
 #include <QContextMenuEvent>
 #include <QGraphicsEllipseItem>
 #include <QGraphicsLineItem>
+#include <QGraphicsPolygonItem>
 #include <QGraphicsSimpleTextItem>
 #include <QHelpEvent>
 #include <QMenu>
@@ -20,7 +21,14 @@ namespace {
 constexpr double kNodeRadius = 9.0;  // screen pixels at any zoom
 
 // Node positions in scene units: registered scans at their x/y (y up on screen), others on a circle.
-std::vector<QPointF> Layout(const io::Project& project) {
+// Top view of the registered scans: world (x, y) to scene units (600 across the registered extent).
+struct TopView {
+  double min_x = 0, min_y = 0, scale = 1;
+  bool valid = false;  // at least two registered scans
+  QPointF Map(const Eigen::Vector3d& p) const { return QPointF((p.x() - min_x) * scale, -(p.y() - min_y) * scale); }
+};
+
+std::vector<QPointF> Layout(const io::Project& project, TopView* view) {
   const int n = static_cast<int>(project.scans.size());
   std::vector<QPointF> pos(n);
   double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
@@ -34,6 +42,7 @@ std::vector<QPointF> Layout(const io::Project& project) {
   }
   const double extent = std::max({max_x - min_x, max_y - min_y, 1e-6});
   const double scale = registered >= 2 ? 600.0 / extent : 1.0;
+  *view = TopView{min_x, min_y, scale, registered >= 2};
   int k = 0;
   // Clusters (scans registered to each other, not to the root) to the right, in their own frame.
   double cluster_x = 750;
@@ -41,8 +50,7 @@ std::vector<QPointF> Layout(const io::Project& project) {
   for (int i = 0; i < n; ++i) {
     const io::ProjectScan& s = project.scans[i];
     if (s.registered && registered >= 2) {
-      const Eigen::Vector3d t = s.world_from_scan.translation();
-      pos[i] = QPointF((t.x() - min_x) * scale, -(t.y() - min_y) * scale);
+      pos[i] = view->Map(s.world_from_scan.translation());
     } else if (!s.registered && !s.cluster.empty() && project.FindScan(s.cluster) >= 0) {
       const Eigen::Vector3d root = project.scans[project.FindScan(s.cluster)].world_from_scan.translation();
       if (!cluster_origin.count(s.cluster)) {
@@ -82,8 +90,9 @@ void NetworkPanel::Show(const io::Project& project) {
   project_ = project;
   QGraphicsScene* s = scene();
   s->clear();
-  nodes_ = edges_ = 0;
-  pos_ = Layout(project);
+  nodes_ = edges_ = targets_ = 0;
+  TopView view;
+  pos_ = Layout(project, &view);
   const std::vector<bool> on_hand = io::RestsOnHandPlacement(project);
   for (std::size_t k = 0; k < project.links.size(); ++k) {
     const io::LinkRecord& l = project.links[k];
@@ -124,6 +133,41 @@ void NetworkPanel::Show(const io::Project& project) {
     label->setTransform(QTransform::fromTranslate(kNodeRadius + 2, -kNodeRadius - 14));
     label->setBrush(palette().text());
     ++nodes_;
+  }
+  // Targets (issue 15): where the registered scans that saw them put them, one mark per target
+  // (the mean of its observations); tied to control blue, others grey, red beyond 1 cm residual.
+  std::map<std::string, std::pair<Eigen::Vector3d, int>> where;
+  std::map<std::string, double> worst;
+  for (const io::TargetRecord& t : project.targets) {
+    const int s = project.FindScan(t.scan);
+    if (!view.valid || s < 0 || !project.scans[s].registered) continue;
+    const std::string key = t.name.empty() ? t.scan + "/" + std::to_string(&t - project.targets.data()) : t.name;
+    auto& [sum, count] = where.try_emplace(key, Eigen::Vector3d::Zero(), 0).first->second;
+    sum += project.scans[s].world_from_scan * t.center;
+    ++count;
+    worst[key] = std::max(worst[key], t.residual_m);
+  }
+  for (const auto& [name, sum_count] : where) {
+    const bool control = std::any_of(project.control.begin(), project.control.end(),
+                                     [&](const io::ControlPoint& c) { return c.name == name; });
+    const QColor colour = worst[name] > 0.01 ? QColor(210, 40, 40) : control ? QColor(40, 90, 220) : QColor(130, 130, 130);
+    QPen pen(colour, 2);
+    pen.setCosmetic(true);
+    QPolygonF diamond({QPointF(0, -6), QPointF(6, 0), QPointF(0, 6), QPointF(-6, 0)});
+    auto* mark = s->addPolygon(diamond, pen, QBrush(colour.lighter(150)));
+    mark->setFlag(QGraphicsItem::ItemIgnoresTransformations);
+    mark->setPos(view.Map(sum_count.first / sum_count.second));
+    mark->setZValue(1);
+    mark->setToolTip(tr("target %1: seen by %n scan(s)", "", sum_count.second).arg(QString::fromStdString(name)) +
+                     (worst[name] >= 0 ? tr(", largest residual %1 mm").arg(worst[name] * 1000, 0, 'f', 1) : QString()));
+    if (control) {
+      auto* label = s->addSimpleText(QString::fromStdString(name));
+      label->setFlag(QGraphicsItem::ItemIgnoresTransformations);
+      label->setPos(view.Map(sum_count.first / sum_count.second));
+      label->setTransform(QTransform::fromTranslate(7, 2));
+      label->setBrush(colour);
+    }
+    ++targets_;
   }
   Fit();
 }

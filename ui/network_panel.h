@@ -3,7 +3,8 @@
 // loop checks grey dashed). The wheel zooms, a drag pans, a double-click on empty space fits;
 // labels and nodes keep their screen size at any zoom. Links are picked within a few pixels; where
 // several run close together the context menu lists each. Tooltips give a link's evidence and a
-// scan's state. Right-click a scan to register it to another (its current parent and the match
+// scan's state. Targets seen by the scans (issue 15) are diamonds, blue and named when tied to a
+// control point, red when a residual exceeds 1 cm. Right-click a scan to register it to another (its current parent and the match
 // counts shown) or clear its parent; right-click a link to accept or reject it.
 #pragma once
 
@@ -27,6 +28,7 @@ class NetworkPanel : public ZoomView {
   void Show(const io::Project& project);
   int NodeCount() const { return nodes_; }
   int EdgeCount() const { return edges_; }
+  int TargetCount() const { return targets_; }  // target marks drawn (one per target)
 
   // What is under a point of the view: the scan whose node is within a few pixels (empty: none), and
   // the links passing within tolerance_px, nearest first (indices into the project's links).
@@ -51,6 +53,7 @@ class NetworkPanel : public ZoomView {
   std::vector<QPointF> pos_;  // node positions, scene units
   int nodes_ = 0;
   int edges_ = 0;
+  int targets_ = 0;
 };
 
 }  // namespace scanreg::ui

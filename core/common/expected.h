@@ -47,7 +47,8 @@ class [[nodiscard]] Expected {
 
   T& value() & { return std::get<0>(data_); }
   const T& value() const& { return std::get<0>(data_); }
-  T&& value() && { return std::get<0>(std::move(data_)); }
+  // By value: `for (x : F().value())` must not iterate a temporary that is already gone.
+  T value() && { return std::get<0>(std::move(data_)); }
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
   T* operator->() { return &value(); }

@@ -268,9 +268,10 @@ std::optional<DetectedChecker> FitAt(const Grid& g, int r0, int c0, const Checke
   const double sigma_in_plane = std::sqrt(std::max(cov.topLeftCorner<2, 2>().eigenvalues().real().maxCoeff(), 0.0));
   const double sigma_across = rms / std::sqrt(static_cast<double>(used)) / cos0;  // along the line of sight
   const double sigma = std::hypot(sigma_in_plane, sigma_across);
-  if (sigma > o.max_sigma_m) return std::nullopt;
+  if (!(sigma <= o.max_sigma_m)) return std::nullopt;
   DetectedChecker d;
   d.center = q0 + best[0] * e1 + best[1] * e2;
+  if (!d.center.allFinite()) return std::nullopt;
   d.normal = normal;
   d.sigma_m = sigma;
   d.contrast = contrast;

@@ -7,6 +7,7 @@
 #include <QtTest/QtTest>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "core/io/project.h"
 #include "core/pipeline/create_project.h"
@@ -20,6 +21,7 @@
 #include "core/simulate/project_sim.h"
 #include "ui/control_panel.h"
 #include "ui/main_window.h"
+#include "ui/network_panel.h"
 #include "ui/pick_target_dialog.h"
 #include "ui/scan_cloud_actors.h"
 
@@ -212,6 +214,13 @@ class ControlPanelTest : public QObject {
     bool used = false;
     for (const auto& row : placed.georef->control) used = used || (row.name == nearest->name && row.role == "used");
     QVERIFY(used);
+    // The network view draws one mark per target (every target is named after the adjustment).
+    std::set<std::string> names;
+    for (const auto& t : placed.targets) names.insert(t.name);
+    auto* network = window.findChild<scanreg::ui::NetworkPanel*>("ScanNetwork");
+    QVERIFY(network != nullptr);
+    QVERIFY(names.size() >= 3);
+    QCOMPARE(network->TargetCount(), static_cast<int>(names.size()));
   }
 };
 
