@@ -280,7 +280,7 @@ int RunRegister(const std::vector<std::string>& argv) {
     }
     project->scans[child].parent_override = project->scans[parent].name;
   }
-  if (!args->Has("no-cache")) options->feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
+  if (!args->Has("no-cache")) options->feature_cache_dir = pipeline::ProjectCacheDir(*project);
   int imported = 0;
   for (const io::ProjectScan& s : project->scans) imported += s.registered && s.imported_pose;
   if (imported > 0) {

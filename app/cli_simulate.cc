@@ -5,6 +5,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_scans.h"
 
 namespace scanreg::cli {
 namespace {
@@ -147,7 +148,7 @@ int RunDemo(const std::vector<std::string>& argv) {
   std::printf("\nregistering (coarse 3D RANSAC + dense ICP, loop checks)...\n");
   pipeline::RegisterOptions register_options;
   register_options.range_sigma_m = options->scanner.range_noise_m;
-  register_options.feature_cache_dir = project->file.parent_path() / ".scanreg-cache";
+  register_options.feature_cache_dir = pipeline::ProjectCacheDir(*project);
   const int status = RegisterAndReport(*project, register_options, false);
   if (status != 0 && status != 3) return status;
   // The merged surface of the registered scans: TSDF (S's ML distance takes minutes on a street),

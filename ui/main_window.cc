@@ -471,7 +471,7 @@ pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
   Expected<pipeline::RegisterOptions> saved = pipeline::ProjectRegisterOptions(project());
   pipeline::RegisterOptions options = saved ? *saved : pipeline::RegisterOptions();
   if (!saved) LogWarning(saved.error().message + "; the defaults are used (Registration → Settings… sets them)");
-  options.feature_cache_dir = project().file.parent_path() / ".scanreg-cache";
+  options.feature_cache_dir = pipeline::ProjectCacheDir(project());
   return options;
 }
 

@@ -2,9 +2,14 @@
 
 #include <map>
 
+#include "core/io/scan_cache.h"
 #include "core/io/scan_file.h"
 
 namespace scanreg::pipeline {
+
+std::filesystem::path ProjectCacheDir(const io::Project& project) {
+  return project.file.empty() ? std::filesystem::path() : project.file.parent_path() / ".scanreg-cache";
+}
 
 Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, ProgressSink& progress,
                                              const CancelToken& cancel) {
@@ -24,7 +29,7 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
                                                  "remove the scan from the project");
     }
     if (it == files.end()) {
-      Expected<std::vector<Scan>> read = io::ReadScanFile(ps.path, sub, cancel);
+      Expected<std::vector<Scan>> read = io::ReadScanFileCached(ps.path, ProjectCacheDir(project), sub, cancel);
       if (!read) return read.error();
       it = files.emplace(ps.path, std::move(*read)).first;
     }

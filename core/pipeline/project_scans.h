@@ -12,7 +12,12 @@
 
 namespace scanreg::pipeline {
 
-// Reads every scan of the project (each file once), names it as in the project and sets its
+// The folder of the project's caches (binary scans, features): ".scanreg-cache" beside the
+// project file; empty (no cache) for a project never saved.
+std::filesystem::path ProjectCacheDir(const io::Project& project);
+
+// Reads every scan of the project (each file once, from the binary scan cache when it holds the
+// file's content: io::ReadScanFileCached), names it as in the project and sets its
 // world_from_scan and reference pose from the project. Errors name the scan and its file (a
 // missing file: how to relink it).
 Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, ProgressSink& progress,

@@ -15,6 +15,7 @@
 #include "core/io/e57_writer.h"
 #include "core/io/ply.h"
 #include "core/io/ptx.h"
+#include "core/io/scan_cache.h"
 #include "tests/bench/bench_table.h"
 #include "tests/io/io_test_util.h"
 
@@ -67,6 +68,19 @@ void RunIoBench(Table& table, bool quick) {
                Millions(cells, "lines") + ", " + std::to_string(int(read_s * 1e3)) + " ms incl. angles"});
     table.Add({"io", "PTX read " + size + " (scanreg)", ptx_mib / read_s, "MiB/s", ""});
   }
+  back = MakeError(ErrorCode::kFailed, "freed");
+
+  // Reopening (issue 13, item 2): the same PTX through the binary scan cache, first read (parse and
+  // store) and second (from the cache: the key hashes the file, then the arrays are read).
+  const auto cache = dir / "cache";
+  bool hit = false;
+  const double first_s = Seconds([&] { back = io::ReadScanFileCached(ptx, cache, progress, cancel, &hit); });
+  const double cached_s = Seconds([&] { back = io::ReadScanFileCached(ptx, cache, progress, cancel, &hit); });
+  const bool same = back && back->size() == 1 && (*back)[0].CountValid() == scan.CountValid();
+  table.Add({"io", "PTX reopen " + size + ": parse + store in the scan cache", first_s, "s", ""});
+  table.Add({"io", "PTX reopen " + size + ": from the scan cache", cached_s, "s",
+             same && hit ? "x" + std::to_string(int(read_s / cached_s)) + " faster than parsing"
+                         : std::string("failed: not from the cache or wrong content")});
   back = MakeError(ErrorCode::kFailed, "freed");
 
   // Ours: E57 (valid cells only; Float single xyz + intensity, bit-packed row/column indices).

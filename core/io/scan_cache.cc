@@ -1,0 +1,181 @@
+#include "core/io/scan_cache.h"
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+#include "core/common/atomic_file.h"
+#include "core/common/hash.h"
+#include "core/common/log.h"
+#include "core/io/scan_file.h"
+
+namespace scanreg::io {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8;
+
+template <typename T>
+void Put(std::string& out, const T& value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+void PutBytes(std::string& out, const void* data, std::size_t bytes) {
+  out.append(static_cast<const char*>(data), bytes);
+}
+
+// Reads from the entry's bytes, refusing to run past their end.
+struct Reader {
+  const std::string& in;
+  std::size_t pos = 0;
+  bool ok = true;
+  bool Bytes(void* out, std::size_t n) {
+    if (!ok || n > in.size() - pos) return ok = false;
+    std::memcpy(out, in.data() + pos, n);
+    pos += n;
+    return true;
+  }
+  template <typename T>
+  T Get() {
+    T v{};
+    Bytes(&v, sizeof(T));
+    return v;
+  }
+};
+
+std::uint64_t Checksum(const char* data, std::size_t bytes) {
+  Hasher h(0x5CA4CAC4EULL);
+  h.Add(data, bytes);
+  return h.Digest();
+}
+
+void PutPose(std::string& out, const Eigen::Isometry3d& pose) { PutBytes(out, pose.matrix().data(), 16 * sizeof(double)); }
+
+}  // namespace
+
+Expected<std::uint64_t> SourceFileKey(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return MakeError(ErrorCode::kNotFound, "cannot read '" + file.string() + "'");
+  Hasher h(kVersion);
+  std::vector<char> buffer(1 << 22);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const std::streamsize got = in.gcount();
+    if (got > 0) h.Add(buffer.data(), static_cast<std::size_t>(got));
+  }
+  if (in.bad()) return MakeError(ErrorCode::kIoError, "reading '" + file.string() + "' failed");
+  return h.Digest();
+}
+
+std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, std::uint64_t key) {
+  char name[48];
+  std::snprintf(name, sizeof(name), "scans_%016llx.scan", static_cast<unsigned long long>(key));
+  return cache_dir / name;
+}
+
+std::string SerializeScanCache(const std::vector<Scan>& scans, std::uint64_t key) {
+  std::string out;
+  PutBytes(out, kMagic, 8);
+  Put(out, kVersion);
+  Put(out, static_cast<std::uint32_t>(scans.size()));
+  Put(out, key);
+  for (const Scan& s : scans) {
+    Put(out, static_cast<std::uint32_t>(s.name.size()));
+    PutBytes(out, s.name.data(), s.name.size());
+    Put(out, static_cast<std::int32_t>(s.rows));
+    Put(out, static_cast<std::int32_t>(s.cols));
+    PutPose(out, s.world_from_scan);
+    Put(out, static_cast<std::uint8_t>(s.reference_world_from_scan.has_value()));
+    if (s.reference_world_from_scan) PutPose(out, *s.reference_world_from_scan);
+    Put(out, static_cast<std::uint32_t>(s.angles.azimuth.size()));
+    PutBytes(out, s.angles.azimuth.data(), s.angles.azimuth.size() * sizeof(float));
+    Put(out, static_cast<std::uint32_t>(s.angles.elevation.size()));
+    PutBytes(out, s.angles.elevation.data(), s.angles.elevation.size() * sizeof(float));
+    PutBytes(out, s.points.data(), s.points.size() * sizeof(Eigen::Vector3f));
+    PutBytes(out, s.reflectance.data(), s.reflectance.size() * sizeof(float));
+    PutBytes(out, s.valid.data(), s.valid.size());
+  }
+  Put(out, Checksum(out.data() + kHeaderBytes, out.size() - kHeaderBytes));
+  return out;
+}
+
+Expected<std::vector<Scan>> ParseScanCache(const std::string& bytes, std::uint64_t key) {
+  auto bad = [](const std::string& why) { return MakeError(ErrorCode::kParseError, "scan cache entry: " + why); };
+  if (bytes.size() < kHeaderBytes + 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) return bad("not a scan cache entry");
+  Reader r{bytes, 8};
+  if (r.Get<std::uint32_t>() != kVersion) return bad("written by another version");
+  const std::uint32_t n = r.Get<std::uint32_t>();
+  if (r.Get<std::uint64_t>() != key) return bad("the entry of another file");
+  std::uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
+  if (stored != Checksum(bytes.data() + kHeaderBytes, bytes.size() - kHeaderBytes - 8)) return bad("checksum mismatch (corrupt)");
+  std::vector<Scan> scans;
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t name_bytes = r.Get<std::uint32_t>();
+    if (!r.ok || name_bytes > 4096) return bad("truncated or corrupt scan name");
+    std::string name(name_bytes, '\0');
+    r.Bytes(name.data(), name_bytes);
+    const std::int32_t rows = r.Get<std::int32_t>(), cols = r.Get<std::int32_t>();
+    // Sizes are checked against the bytes that remain before anything is allocated.
+    const std::uint64_t cells = static_cast<std::uint64_t>(std::max(rows, 0)) * static_cast<std::uint64_t>(std::max(cols, 0));
+    if (!r.ok || rows <= 0 || cols <= 0 || cells * 17 > bytes.size()) return bad("truncated or corrupt grid size");
+    Scan s(std::move(name), rows, cols);
+    Eigen::Matrix4d m;
+    r.Bytes(m.data(), 16 * sizeof(double));
+    s.world_from_scan.matrix() = m;
+    if (r.Get<std::uint8_t>()) {
+      r.Bytes(m.data(), 16 * sizeof(double));
+      Eigen::Isometry3d ref;
+      ref.matrix() = m;
+      s.reference_world_from_scan = ref;
+    }
+    const std::uint32_t az = r.Get<std::uint32_t>();
+    if (!r.ok || (az != 0 && az != static_cast<std::uint32_t>(cols))) return bad("corrupt angles");
+    s.angles.azimuth.resize(az);
+    r.Bytes(s.angles.azimuth.data(), az * sizeof(float));
+    const std::uint32_t el = r.Get<std::uint32_t>();
+    if (!r.ok || (el != 0 && el != static_cast<std::uint32_t>(rows))) return bad("corrupt angles");
+    s.angles.elevation.resize(el);
+    r.Bytes(s.angles.elevation.data(), el * sizeof(float));
+    r.Bytes(s.points.data(), cells * sizeof(Eigen::Vector3f));
+    r.Bytes(s.reflectance.data(), cells * sizeof(float));
+    r.Bytes(s.valid.data(), cells);
+    if (!r.ok) return bad("truncated");
+    scans.push_back(std::move(s));
+  }
+  if (r.pos + 8 != bytes.size()) return bad("trailing bytes");
+  return scans;
+}
+
+Expected<std::vector<Scan>> ReadScanFileCached(const std::filesystem::path& file,
+                                               const std::filesystem::path& cache_dir, ProgressSink& progress,
+                                               const CancelToken& cancel, bool* from_cache) {
+  if (from_cache) *from_cache = false;
+  if (cache_dir.empty()) return ReadScanFile(file, progress, cancel);
+  Expected<std::uint64_t> key = SourceFileKey(file);
+  if (!key) return ReadScanFile(file, progress, cancel);  // the reader names the problem
+  const std::filesystem::path entry = ScanCachePath(cache_dir, *key);
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(entry, ec)) {
+    std::ifstream in(entry, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    Expected<std::vector<Scan>> cached = ParseScanCache(bytes, *key);
+    if (cached) {
+      if (from_cache) *from_cache = true;
+      progress.Report(1.0, "read " + file.filename().string() + " from the scan cache");
+      return cached;
+    }
+    LogWarning(entry.string() + ": " + cached.error().message + "; re-reading " + file.string());
+  }
+  Expected<std::vector<Scan>> read = ReadScanFile(file, progress, cancel);
+  if (!read) return read;
+  std::filesystem::create_directories(cache_dir, ec);
+  AtomicFile out(entry);
+  Status s = out.Open();
+  if (s) s = out.Write(SerializeScanCache(*read, *key));
+  if (s) s = out.Commit();
+  if (!s) LogWarning("scan cache: cannot write " + entry.string() + ": " + s.error().message);
+  return read;
+}
+
+}  // namespace scanreg::io

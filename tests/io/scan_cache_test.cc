@@ -1,0 +1,107 @@
+// The binary scan cache (issue 13, item 2): a second read of a scan file comes from the cache with
+// the same scans; a corrupt entry is rebuilt with a warning; a changed source file is re-read.
+#include "core/io/scan_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/io/ptx.h"
+#include "core/io/scan_file.h"
+#include "tests/support/test_paths.h"
+
+namespace scanreg::io {
+namespace {
+
+Scan Grid(const std::string& name, float offset) {
+  Scan scan(name, 12, 30);
+  for (int r = 0; r < scan.rows; ++r)
+    for (int c = 0; c < scan.cols; ++c)
+      if ((r + c) % 4 != 0) scan.Set(r, c, Eigen::Vector3f(4.0f + offset, 0.05f * c, 0.1f * r - 0.3f), 0.01f * c);
+  scan.world_from_scan.translation() = Eigen::Vector3d(512345.678, 5401234.5, 100.25);
+  return scan;
+}
+
+void ExpectSameScans(const std::vector<Scan>& a, const std::vector<Scan>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].name, b[k].name);
+    ASSERT_EQ(a[k].rows, b[k].rows);
+    ASSERT_EQ(a[k].cols, b[k].cols);
+    EXPECT_EQ(a[k].valid, b[k].valid);
+    EXPECT_EQ(a[k].reflectance, b[k].reflectance);
+    for (std::size_t i = 0; i < a[k].size(); ++i) ASSERT_EQ(a[k].points[i], b[k].points[i]) << "cell " << i;
+    EXPECT_EQ(a[k].world_from_scan.matrix(), b[k].world_from_scan.matrix()) << "bit for bit at UTM coordinates";
+    EXPECT_EQ(a[k].angles.azimuth, b[k].angles.azimuth);
+    EXPECT_EQ(a[k].angles.elevation, b[k].angles.elevation);
+  }
+}
+
+struct CacheFixture : ::testing::Test {
+  test::TempDir dir;
+  std::filesystem::path ptx = dir / "two.ptx", cache = dir / ".scanreg-cache";
+  NullProgress progress;
+  CancelToken cancel;
+  void Write(float offset) {
+    ASSERT_TRUE(WritePtx(ptx, {Grid("a", offset), Grid("b", offset + 1)}, progress, cancel).ok());
+  }
+  std::vector<Scan> Read(bool* from_cache) {
+    auto scans = ReadScanFileCached(ptx, cache, progress, cancel, from_cache);
+    EXPECT_TRUE(scans.ok()) << scans.error().message;
+    return scans.ok() ? *scans : std::vector<Scan>{};
+  }
+};
+
+TEST_F(CacheFixture, ASecondReadComesFromTheCacheUnchanged) {
+  Write(0);
+  bool hit = true;
+  const std::vector<Scan> parsed = Read(&hit);
+  EXPECT_FALSE(hit);
+  auto key = SourceFileKey(ptx);
+  ASSERT_TRUE(key.ok());
+  EXPECT_TRUE(std::filesystem::is_regular_file(ScanCachePath(cache, *key)));
+  const std::vector<Scan> cached = Read(&hit);
+  EXPECT_TRUE(hit);
+  ExpectSameScans(parsed, cached);
+  auto direct = ReadScanFile(ptx, progress, cancel);
+  ASSERT_TRUE(direct.ok());
+  ExpectSameScans(*direct, cached);
+}
+
+TEST_F(CacheFixture, ACorruptEntryIsRebuilt) {
+  Write(0);
+  bool hit = true;
+  const std::vector<Scan> parsed = Read(&hit);
+  const std::filesystem::path entry = ScanCachePath(cache, SourceFileKey(ptx).value());
+  {
+    std::fstream f(entry, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(std::filesystem::file_size(entry) / 2));
+    f.put('\x5a');
+  }
+  const std::vector<Scan> again = Read(&hit);
+  EXPECT_FALSE(hit) << "a corrupt entry is not used";
+  ExpectSameScans(parsed, again);
+  Read(&hit);
+  EXPECT_TRUE(hit) << "and it was written anew";
+  // Truncated and foreign entries are refused with a reason.
+  std::ifstream in(entry, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_FALSE(ParseScanCache(bytes.substr(0, bytes.size() / 3), SourceFileKey(ptx).value()).ok());
+  auto foreign = ParseScanCache(bytes, 12345);
+  ASSERT_FALSE(foreign.ok());
+  EXPECT_NE(foreign.error().message.find("another file"), std::string::npos);
+}
+
+TEST_F(CacheFixture, AChangedSourceFileIsReadAgain) {
+  Write(0);
+  bool hit = true;
+  Read(&hit);
+  Write(0.5f);  // the same file name, other points
+  const std::vector<Scan> changed = Read(&hit);
+  EXPECT_FALSE(hit);
+  ASSERT_EQ(changed.size(), 2u);
+  EXPECT_FLOAT_EQ(changed[0].Point(0, 1).x(), 4.5f);
+}
+
+}  // namespace
+}  // namespace scanreg::io
