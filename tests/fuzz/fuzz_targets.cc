@@ -11,6 +11,7 @@
 #include "core/io/ply.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
+#include "core/io/scan_cache.h"
 #include "core/io/project.h"
 #include "core/io/ptx.h"
 
@@ -224,6 +225,22 @@ std::vector<FuzzTarget> MakeTargets(const fs::path& work_dir) {
     };
   }
   targets.push_back(cache);
+
+  // A binary scan cache entry (issue 13) of two scans, parsed under its key.
+  FuzzTarget scan_cache{"scan-cache", ".scan", {}, nullptr};
+  {
+    const std::uint64_t key = 0x5CA7C4C4E0000001ULL;
+    const std::vector<Scan> two = {SeedScan("a", 20, 40, 0.1), SeedScan("b", 10, 30, 0.3)};
+    scan_cache.seeds.push_back(io::SerializeScanCache(two, key));
+    scan_cache.read = [key](const fs::path& f, bool* ok) {
+      return Judge(io::ParseScanCache(Slurp(f), key), ok, [](const std::vector<Scan>& scans) {
+        for (const Scan& s : scans)
+          if (Status v = s.Validate(); !v) return v.error().message;
+        return std::string();
+      });
+    };
+  }
+  targets.push_back(scan_cache);
   return targets;
 }
 
