@@ -1,6 +1,7 @@
 #include "core/pipeline/register_project.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -148,14 +149,26 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   if (!choices) return choices.error();
 
   // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
+  // Scans are independent: prepared concurrently (issue 13, item 4), each result in its own slot,
+  // so the outcome does not depend on the thread count; the first error in scan order is returned.
   std::vector<PreparedScan> prepared(n);
   auto t0 = std::chrono::steady_clock::now();
+  std::vector<Status> prepared_ok(n, Status::Ok());
+  std::vector<char> from_cache(n, 0);
+  std::atomic<int> scans_done{0};
+#pragma omp parallel for schedule(dynamic, 1)
   for (int i = 0; i < n; ++i) {
-    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
-    progress.Report(0.3 * i / n, "features of " + scans[i].name);
+    if (cancel.IsCancelled()) continue;
     bool cached = false;
-    if (Status st = PrepareScanFeatures(scans[i], options, &prepared[i], &cached, cancel); !st) return st.error();
-    result.features_from_cache += cached;
+    prepared_ok[i] = PrepareScanFeatures(scans[i], options, &prepared[i], &cached, cancel);
+    from_cache[i] = cached;
+    const int done = ++scans_done;
+    progress.Report(0.3 * done / n, "features of " + std::to_string(done) + " of " + std::to_string(n) + " scans");
+  }
+  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+  for (int i = 0; i < n; ++i) {
+    if (!prepared_ok[i]) return prepared_ok[i].error();
+    result.features_from_cache += from_cache[i];
   }
   result.seconds_features = Since(t0);
 
@@ -170,15 +183,26 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   std::map<std::pair<int, int>, std::vector<GeometricMatch>> geometric_matches;
   Eigen::MatrixXi weights = result.confusion;
   if (UsesGeometric(options.features)) {
+    // Every pair on its own (concurrently), then gathered in pair order.
+    std::vector<std::pair<int, int>> pairs;
     for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) {
-        if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
-        std::vector<GeometricMatch>& m = geometric_matches[{i, j}];
-        m = MatchGeometric(prepared[i].geometric, prepared[j].geometric);
-        const int w = GeometricWeight(prepared[i], prepared[j], m, options);
-        weights(i, j) += w;
-        weights(j, i) += w;
-      }
+      for (int j = i + 1; j < n; ++j) pairs.emplace_back(i, j);
+    std::vector<std::vector<GeometricMatch>> pair_matches(pairs.size());
+    std::vector<int> pair_weight(pairs.size(), 0);
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long k = 0; k < static_cast<long>(pairs.size()); ++k) {
+      if (cancel.IsCancelled()) continue;
+      const auto [i, j] = pairs[k];
+      pair_matches[k] = MatchGeometric(prepared[i].geometric, prepared[j].geometric);
+      pair_weight[k] = GeometricWeight(prepared[i], prepared[j], pair_matches[k], options);
+    }
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const auto [i, j] = pairs[k];
+      geometric_matches[{i, j}] = std::move(pair_matches[k]);
+      weights(i, j) += pair_weight[k];
+      weights(j, i) += pair_weight[k];
+    }
   }
   result.seconds_matching = Since(t0);
   const auto geometric_of = [&](int parent, int child) {
