@@ -67,10 +67,25 @@ Expected<std::uint64_t> SourceFileKey(const std::filesystem::path& file) {
   return h.Digest();
 }
 
-std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, std::uint64_t key) {
-  char name[48];
-  std::snprintf(name, sizeof(name), "scans_%016llx.scan", static_cast<unsigned long long>(key));
-  return cache_dir / name;
+namespace {
+
+// "scans_<8 hex of the absolute path>_": the prefix of every entry of one source file.
+std::string EntryPrefix(const std::filesystem::path& file) {
+  const std::string path = std::filesystem::absolute(file).lexically_normal().string();
+  Hasher h(0xF11EULL);
+  h.Add(path.data(), path.size());
+  char prefix[32];
+  std::snprintf(prefix, sizeof(prefix), "scans_%08llx_", static_cast<unsigned long long>(h.Digest() & 0xffffffffULL));
+  return prefix;
+}
+
+}  // namespace
+
+std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, const std::filesystem::path& file,
+                                    std::uint64_t key) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%016llx.scan", static_cast<unsigned long long>(key));
+  return cache_dir / (EntryPrefix(file) + name);
 }
 
 std::string SerializeScanCache(const std::vector<Scan>& scans, std::uint64_t key) {
@@ -154,7 +169,7 @@ Expected<std::vector<Scan>> ReadScanFileCached(const std::filesystem::path& file
   if (cache_dir.empty()) return ReadScanFile(file, progress, cancel);
   Expected<std::uint64_t> key = SourceFileKey(file);
   if (!key) return ReadScanFile(file, progress, cancel);  // the reader names the problem
-  const std::filesystem::path entry = ScanCachePath(cache_dir, *key);
+  const std::filesystem::path entry = ScanCachePath(cache_dir, file, *key);
   std::error_code ec;
   if (std::filesystem::is_regular_file(entry, ec)) {
     std::ifstream in(entry, std::ios::binary);
@@ -174,7 +189,17 @@ Expected<std::vector<Scan>> ReadScanFileCached(const std::filesystem::path& file
   Status s = out.Open();
   if (s) s = out.Write(SerializeScanCache(*read, *key));
   if (s) s = out.Commit();
-  if (!s) LogWarning("scan cache: cannot write " + entry.string() + ": " + s.error().message);
+  if (!s) {
+    LogWarning("scan cache: cannot write " + entry.string() + ": " + s.error().message);
+    return read;
+  }
+  // The file's superseded entries (its earlier contents) go.
+  const std::string prefix = EntryPrefix(file);
+  for (const auto& e : std::filesystem::directory_iterator(cache_dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) == 0 && e.path() != entry && name.size() > 5 && name.substr(name.size() - 5) == ".scan")
+      std::filesystem::remove(e.path(), ec);
+  }
   return read;
 }
 

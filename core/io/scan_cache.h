@@ -1,8 +1,10 @@
 // A binary copy of each scan file beside the project (issue 13, item 2), so that reopening a
 // project of many scans reads arrays instead of re-parsing text (PTX parses at ~6 M points/s).
 //
-// One entry per source file, "<cache_dir>/scans_<16 hex key>.scan", the key a hash of the source
-// file's bytes (a changed file is a new key: never a stale entry). Native little-endian:
+// One entry per source file, "<cache_dir>/scans_<8 hex of the path>_<16 hex key>.scan", the key a
+// hash of the source file's bytes (a changed file is a new key: never a stale entry); writing a
+// file's new entry removes its superseded ones, so the cache holds one entry per file. Native
+// little-endian:
 //   char[8] magic "SRGSCAN\0" | u32 version | u32 scans | u64 key |
 //   per scan: u32 name bytes, name | i32 rows | i32 cols | 16 f64 world_from_scan (column-major) |
 //             u8 has reference, 16 f64 if so | u32 azimuths, f32 x n | u32 elevations, f32 x n |
@@ -26,7 +28,8 @@ namespace scanreg::io {
 
 // The key of a source file: a hash of its bytes (read once, ~1 GB/s from the page cache).
 Expected<std::uint64_t> SourceFileKey(const std::filesystem::path& file);
-std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, std::uint64_t key);
+std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, const std::filesystem::path& file,
+                                    std::uint64_t key);
 
 std::string SerializeScanCache(const std::vector<Scan>& scans, std::uint64_t key);
 // An error says what is wrong (not a cache entry, another file's, truncated, corrupt).

@@ -59,7 +59,7 @@ TEST_F(CacheFixture, ASecondReadComesFromTheCacheUnchanged) {
   EXPECT_FALSE(hit);
   auto key = SourceFileKey(ptx);
   ASSERT_TRUE(key.ok());
-  EXPECT_TRUE(std::filesystem::is_regular_file(ScanCachePath(cache, *key)));
+  EXPECT_TRUE(std::filesystem::is_regular_file(ScanCachePath(cache, ptx, *key)));
   const std::vector<Scan> cached = Read(&hit);
   EXPECT_TRUE(hit);
   ExpectSameScans(parsed, cached);
@@ -72,7 +72,7 @@ TEST_F(CacheFixture, ACorruptEntryIsRebuilt) {
   Write(0);
   bool hit = true;
   const std::vector<Scan> parsed = Read(&hit);
-  const std::filesystem::path entry = ScanCachePath(cache, SourceFileKey(ptx).value());
+  const std::filesystem::path entry = ScanCachePath(cache, ptx, SourceFileKey(ptx).value());
   {
     std::fstream f(entry, std::ios::in | std::ios::out | std::ios::binary);
     f.seekp(static_cast<std::streamoff>(std::filesystem::file_size(entry) / 2));
@@ -96,11 +96,14 @@ TEST_F(CacheFixture, AChangedSourceFileIsReadAgain) {
   Write(0);
   bool hit = true;
   Read(&hit);
+  const std::filesystem::path old_entry = ScanCachePath(cache, ptx, SourceFileKey(ptx).value());
   Write(0.5f);  // the same file name, other points
   const std::vector<Scan> changed = Read(&hit);
   EXPECT_FALSE(hit);
   ASSERT_EQ(changed.size(), 2u);
   EXPECT_FLOAT_EQ(changed[0].Point(0, 1).x(), 4.5f);
+  EXPECT_FALSE(std::filesystem::exists(old_entry)) << "the superseded entry is removed: one entry per file";
+  EXPECT_TRUE(std::filesystem::exists(ScanCachePath(cache, ptx, SourceFileKey(ptx).value())));
 }
 
 }  // namespace
