@@ -145,7 +145,8 @@ void NetworkPanel::Show(const io::Project& project) {
     auto& [sum, count] = where.try_emplace(key, Eigen::Vector3d::Zero(), 0).first->second;
     sum += project.scans[s].world_from_scan * t.center;
     ++count;
-    worst[key] = std::max(worst[key], t.residual_m);
+    const auto [it, first] = worst.try_emplace(key, t.residual_m);  // -1: no residual yet
+    if (!first) it->second = std::max(it->second, t.residual_m);
   }
   for (const auto& [name, sum_count] : where) {
     const bool control = std::any_of(project.control.begin(), project.control.end(),

@@ -8,6 +8,7 @@
 #include "core/common/hash.h"
 #include "core/common/log.h"
 #include "core/io/scan_file.h"
+#include "core/io/text_parse.h"
 
 namespace scanreg::io {
 namespace {
@@ -172,9 +173,8 @@ Expected<std::vector<Scan>> ReadScanFileCached(const std::filesystem::path& file
   const std::filesystem::path entry = ScanCachePath(cache_dir, file, *key);
   std::error_code ec;
   if (std::filesystem::is_regular_file(entry, ec)) {
-    std::ifstream in(entry, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    Expected<std::vector<Scan>> cached = ParseScanCache(bytes, *key);
+    Expected<std::string> bytes = ReadWholeFile(entry);  // one block read, not byte by byte
+    Expected<std::vector<Scan>> cached = bytes ? ParseScanCache(*bytes, *key) : Expected<std::vector<Scan>>(bytes.error());
     if (cached) {
       if (from_cache) *from_cache = true;
       progress.Report(1.0, "read " + file.filename().string() + " from the scan cache");
