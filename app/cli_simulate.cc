@@ -19,7 +19,8 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"noise-growth", true, false, "M/M      range noise sigma added per metre of range (default 0; 1e-4 = +1 cm at 100 m)"},
     {"traffic", true, false, "N        N moving vehicles and 2N pedestrians around each station, new in every scan (default 0)"},
     {"seed", true, false, "S        random seed (default 1)"},
-    {"scene", true, false, "street|windows   scene kind (default street)"},
+    {"scene", true, false, "street|windows|city   scene kind (default street); city: a grid of blocks whose streets "
+                           "close loops, grown to hold the stations (no targets, traffic or far station)"},
     {"far-station", false, false, "       add one station far away (no overlap)"},
     {"no-reflectance", false, false, "       write a constant reflectance of 0.5 (as some exporters do): geometry only"},
     {"sphere-targets", true, false, "N        N sphere targets (145 mm) on tripods along the street, and DIR/control.csv "
@@ -54,8 +55,8 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   auto seed = args.GetInt("seed", 1, 0, 1 << 30);
   if (!seed) return seed.error();
   const std::string scene = args.Get("scene").value_or("street");
-  if (scene != "street" && scene != "windows") {
-    return MakeError(ErrorCode::kInvalidArgument, "--scene must be 'street' or 'windows', not '" + scene + "'");
+  if (scene != "street" && scene != "windows" && scene != "city") {
+    return MakeError(ErrorCode::kInvalidArgument, "--scene must be 'street', 'windows' or 'city', not '" + scene + "'");
   }
   options.stations = *stations;
   options.spacing_m = *spacing;
@@ -69,7 +70,9 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   options.seed = static_cast<std::uint64_t>(*seed);
   options.scanner.seed = options.seed;
   options.scene.seed = options.seed;
-  options.scene.kind = scene == "windows" ? SceneOptions::Kind::kRepeatedWindows : SceneOptions::Kind::kStreet;
+  options.scene.kind = scene == "windows" ? SceneOptions::Kind::kRepeatedWindows
+                       : scene == "city"  ? SceneOptions::Kind::kCity
+                                          : SceneOptions::Kind::kStreet;
   options.add_far_station = args.Has("far-station");
   options.scanner.reflectance = !args.Has("no-reflectance");
   auto targets = args.GetInt("sphere-targets", 0, 0, 1000);

@@ -212,26 +212,28 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   if (ec) {
     return MakeError(ErrorCode::kIoError, "cannot create folder '" + dir.string() + "': " + ec.message());
   }
-  SubProgress simulate_progress(progress, 0.0, 0.8);
-  Expected<std::vector<Scan>> scans = SimulateProject(options, simulate_progress, cancel);
-  if (!scans) return scans.error();
   io::Project project;
   const std::filesystem::path project_path = std::filesystem::absolute(dir / "project.scanreg.json");
   project.file = project_path;
   OutputSet written;  // the scans and the project: a project without its scans is not left behind
-  for (std::size_t i = 0; i < scans->size(); ++i) {
-    const Scan& scan = (*scans)[i];
-    const std::filesystem::path ptx = project_path.parent_path() / (scan.name + ".ptx");
-    SubProgress sub(progress, 0.8 + 0.2 * i / scans->size(), 0.8 + 0.2 * (i + 1) / scans->size());
-    written.Track(ptx);
-    if (Status s = io::WritePtx(ptx, {scan}, sub, cancel); !s) return written.Failed(s.error());
-    io::ProjectScan ps;
-    ps.name = scan.name;
-    ps.path = ptx;
-    ps.world_from_scan = scan.world_from_scan;
-    ps.reference_world_from_scan = scan.reference_world_from_scan;
-    project.scans.push_back(std::move(ps));
-  }
+  // Each scan is written as soon as it is simulated: one scan in memory at a time.
+  const Status simulated = SimulateProjectScans(
+      options,
+      [&](Scan&& scan, std::vector<std::uint8_t>&&) -> Status {
+        const std::filesystem::path ptx = project_path.parent_path() / (scan.name + ".ptx");
+        written.Track(ptx);
+        NullProgress quiet;
+        if (Status s = io::WritePtx(ptx, {scan}, quiet, cancel); !s) return s;
+        io::ProjectScan ps;
+        ps.name = scan.name;
+        ps.path = ptx;
+        ps.world_from_scan = scan.world_from_scan;
+        ps.reference_world_from_scan = scan.reference_world_from_scan;
+        project.scans.push_back(std::move(ps));
+        return Status::Ok();
+      },
+      progress, cancel);
+  if (!simulated) return written.Failed(simulated.error());
   project.settings["simulated.stations"] = std::to_string(options.stations);
   project.settings["simulated.seed"] = std::to_string(options.seed);
   project.settings["simulated.size"] =

@@ -15,9 +15,46 @@ constexpr double kDeg = M_PI / 180.0;
 
 double SpanOf(const SimulatedProjectOptions& o) { return (o.stations - 1) * o.spacing_m; }
 
-// The scene the project scans: the street is lengthened to hold every station with 30 m to spare.
+bool IsCity(const SimulatedProjectOptions& o) { return o.scene.kind == SceneOptions::Kind::kCity; }
+
+// kCity: station positions every spacing_m along the streets in walking order, none within half a
+// spacing of an earlier one (crossings are scanned once), at most o.stations of them.
+std::vector<Eigen::Vector3d> CityStations(const SimulatedProjectOptions& o, const SceneOptions& city, sim::Rng& rng) {
+  const double lateral = std::min(1.5, 0.2 * o.spacing_m);
+  std::vector<Eigen::Vector3d> out;
+  for (const StreetLeg& leg : CityStreets(city)) {
+    const Eigen::Vector3d a = (leg.to - leg.from).normalized(), left = Eigen::Vector3d::UnitZ().cross(a);
+    const double length = (leg.to - leg.from).norm();
+    for (double u = 0.0; u <= length + 1e-9 && static_cast<int>(out.size()) < o.stations; u += o.spacing_m) {
+      const Eigen::Vector3d at = leg.from + u * a;
+      bool near = false;
+      for (const Eigen::Vector3d& q : out) near |= (q - at).head<2>().norm() < 0.5 * o.spacing_m;
+      if (near) continue;
+      out.push_back(at + rng.Uniform(-0.1, 0.1) * o.spacing_m * a + rng.Uniform(-lateral, lateral) * left +
+                    Eigen::Vector3d(0, 0, rng.Uniform(1.5, 2.0)));
+    }
+  }
+  return out;
+}
+
+// kCity: the smallest grid of blocks (widening alternately) whose streets hold every station, and
+// never smaller than the options ask; nullopt when even 10 x 10 blocks do not.
+std::optional<SceneOptions> CityFor(const SimulatedProjectOptions& o) {
+  SceneOptions city = o.scene;
+  for (int grow = 0; grow < 40; ++grow) {
+    sim::Rng rng(0);
+    if (static_cast<int>(CityStations(o, city, rng).size()) >= o.stations) return city;
+    if (city.city_blocks_x <= city.city_blocks_y) ++city.city_blocks_x;
+    else ++city.city_blocks_y;
+    if (city.city_blocks_x > 10) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+// The scene the project scans: the street is lengthened to hold every station with 30 m to spare;
+// a city grows to hold them.
 SceneOptions ProjectScene(const SimulatedProjectOptions& o) {
-  SceneOptions s = o.scene;
+  SceneOptions s = IsCity(o) ? CityFor(o).value_or(o.scene) : o.scene;
   s.street_length_m = std::max(s.street_length_m, SpanOf(o) + 60.0);
   s.far_site = s.far_site || o.add_far_station;
   for (const SimulatedTarget& t : SimulatedTargets(o)) {
@@ -50,7 +87,16 @@ Status SimulatedProjectOptions::Validate() const {
   if (!(max_tilt_deg >= 0.0 && max_tilt_deg <= 20.0))
     return MakeError(ErrorCode::kInvalidArgument,
                      "project: max tilt " + std::to_string(max_tilt_deg) + "° is outside [0, 20]°");
-  if (SpanOf(*this) > 900.0)
+  if (IsCity(*this)) {
+    if (sphere_targets > 0 || checker_targets > 0 || add_far_station || traffic.vehicles > 0 || traffic.pedestrians > 0)
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "project: targets, traffic and the far station are simulated on the street scene only, not "
+                       "in the city");
+    if (!CityFor(*this))
+      return MakeError(ErrorCode::kInvalidArgument, "project: " + std::to_string(stations) + " stations " +
+                                                        std::to_string(spacing_m) +
+                                                        " m apart do not fit in a city of 10 x 10 blocks; widen the spacing");
+  } else if (SpanOf(*this) > 900.0)
     return MakeError(ErrorCode::kInvalidArgument, "project: stations span " + std::to_string(SpanOf(*this)) +
                                                       " m; reduce the stations or the spacing (max 900 m)");
   if (!(traffic.vehicles >= 0 && traffic.vehicles <= 500 && traffic.pedestrians >= 0 && traffic.pedestrians <= 500))
@@ -77,6 +123,15 @@ Status SimulatedProjectOptions::Validate() const {
 
 std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptions& o) {
   sim::Rng rng(sim::Hash(o.seed, 0x57a7));
+  if (IsCity(o)) {
+    const std::optional<SceneOptions> city = CityFor(o);
+    std::vector<Eigen::Isometry3d> poses;
+    if (!city) return poses;
+    sim::Rng place(sim::Hash(o.seed, 0xc17));
+    for (const Eigen::Vector3d& p : CityStations(o, *city, place))
+      poses.push_back(StationPose(rng, p, o.max_tilt_deg * kDeg));
+    return poses;
+  }
   const double lateral = std::min(1.5, 0.2 * o.spacing_m);
   std::vector<Eigen::Isometry3d> poses;
   for (int i = 0; i < o.stations; ++i) {
@@ -164,19 +219,32 @@ std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& o) 
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel,
                                             std::vector<std::vector<std::uint8_t>>* moving_cells) {
-  if (Status s = options.Validate(); !s) return s.error();
+  std::vector<Scan> scans;
+  if (moving_cells) moving_cells->clear();
+  const Status s = SimulateProjectScans(
+      options,
+      [&](Scan&& scan, std::vector<std::uint8_t>&& moving) {
+        scans.push_back(std::move(scan));
+        if (moving_cells) moving_cells->push_back(std::move(moving));
+        return Status::Ok();
+      },
+      progress, cancel, moving_cells != nullptr);
+  if (!s) return s.error();
+  return scans;
+}
+
+Status SimulateProjectScans(const SimulatedProjectOptions& options, const ScanSink& sink, ProgressSink& progress,
+                            const CancelToken& cancel, bool with_moving_cells) {
+  if (Status s = options.Validate(); !s) return s;
   progress.Report(0.0, "building the scene");
   const SceneOptions street = ProjectScene(options);
   const Scene static_scene = MakeScene(street);
   const bool traffic = options.traffic.vehicles > 0 || options.traffic.pedestrians > 0;
-  if (moving_cells) moving_cells->clear();
   const std::vector<Eigen::Isometry3d> poses = SimulatedStationPoses(options);
-  std::vector<Scan> scans;
-  scans.reserve(poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "project simulation cancelled");
-    char name[32];
-    std::snprintf(name, sizeof(name), "s%02zu", i + 1);
+    char name[32];  // s01 ... s99, or s001 ... from 100 stations on (names sort in station order)
+    std::snprintf(name, sizeof(name), poses.size() >= 100 ? "s%03zu" : "s%02zu", i + 1);
     ScannerOptions scanner = options.scanner;
     scanner.seed = sim::Hash(options.scanner.seed, options.seed, i);
     const double n = static_cast<double>(poses.size());
@@ -190,13 +258,12 @@ Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& optio
     }
     std::vector<std::uint8_t> moving;
     Expected<Scan> scan = SimulateScan(traffic ? with_traffic : static_scene, poses[i], scanner, name, sub, cancel,
-                                       moving_cells ? &moving : nullptr);
+                                       with_moving_cells ? &moving : nullptr);
     if (!scan) return scan.error();
     scan->reference_world_from_scan = options.control_from_world * poses[i];
-    if (moving_cells) moving_cells->push_back(std::move(moving));
-    scans.push_back(std::move(scan).value());
+    if (Status s = sink(std::move(scan).value(), std::move(moving)); !s) return s;
   }
-  return scans;
+  return Status::Ok();
 }
 
 }  // namespace scanreg

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,12 @@ std::vector<SimulatedTarget> SimulatedTargets(const SimulatedProjectOptions& opt
 Expected<std::vector<Scan>> SimulateProject(const SimulatedProjectOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel,
                                             std::vector<std::vector<std::uint8_t>>* moving_cells = nullptr);
+
+// The same one scan at a time, each handed to `sink` as soon as it is made (with its moving cells when
+// asked for), so that a project of 100+ scans never sits in memory at once. A sink's error stops it.
+using ScanSink = std::function<Status(Scan&&, std::vector<std::uint8_t>&& moving_cells)>;
+Status SimulateProjectScans(const SimulatedProjectOptions& options, const ScanSink& sink, ProgressSink& progress,
+                            const CancelToken& cancel, bool with_moving_cells = false);
 
 // The true scanner poses SimulateProject uses (no scanning), in the same order.
 std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptions& options);

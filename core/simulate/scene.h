@@ -95,11 +95,14 @@ struct SceneOptions {
     kStreet,           // varied buildings, textures, poles, cars, kiosks, benches; some uniform surfaces
     kRepeatedWindows,  // identical buildings and window grids on both sides, plain ground; only the
                        // street furniture (posts, trees, cars) is distinctive
+    kCity,             // a grid of blocks whose streets close loops (scene_city.cc); street length unused
   };
   Kind kind = Kind::kStreet;
   std::uint64_t seed = 1;
   double street_length_m = 100.0;  // length of the built-up street along x, centred on x = 0
   double street_half_width_m = 9.0;  // distance from the centre line to the nearest façades
+  int city_blocks_x = 1, city_blocks_y = 1;  // kCity: blocks between the streets the stations use
+  double city_block_m = 48.0;                // kCity: side of a block
   bool far_site = false;  // also build a separate cluster of buildings around FarSiteCenter()
   // Survey sphere targets (white, on a thin tripod pole down to the ground): their centres.
   std::vector<Eigen::Vector3d> sphere_targets;
@@ -115,6 +118,14 @@ struct SceneOptions {
 
   Status Validate() const;
 };
+
+// A street's centre line from `from` to `to` (on the ground).
+struct StreetLeg {
+  Eigen::Vector3d from, to;
+};
+// kCity: every street the stations may use, in the order a surveyor walks them (the streets along x,
+// alternating direction, then those along y).
+std::vector<StreetLeg> CityStreets(const SceneOptions& options);
 
 // Centre (on the ground) of the far site: > 1 km from the street, beyond any scanner's range.
 Eigen::Vector3d FarSiteCenter();

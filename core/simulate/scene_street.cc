@@ -7,92 +7,14 @@
 
 #include "core/simulate/random.h"
 #include "core/simulate/scene.h"
+#include "core/simulate/scene_builder.h"
 
 namespace scanreg {
 namespace {
 
 using sim::Rng;
+using sim::Builder;
 using Vec3 = Eigen::Vector3d;
-
-struct Builder {
-  Scene& scene;
-  Rng& rng;
-  bool repeated;  // kRepeatedWindows: identical, plain façades
-
-  std::uint64_t Seed() { return rng.Next(); }
-
-  SurfaceTexture Facade(double width, double height, bool textured) {
-    SurfaceTexture t;
-    t.seed = Seed();
-    t.base = static_cast<float>(rng.Uniform(0.35, 0.75));
-    if (textured) {
-      t.noise_amplitude = static_cast<float>(rng.Uniform(0.03, 0.07));
-      t.noise_wavelength_m = rng.Uniform(1.0, 4.0);
-      t.blob_contrast = static_cast<float>(rng.Uniform(0.06, 0.16));
-      t.blob_cell_m = 2.5;
-      t.blob_probability = 0.3;
-      t.blob_radius_m = 0.9;
-      t.stroke_contrast = static_cast<float>(rng.Uniform(0.08, 0.18));
-      t.stroke_probability = 0.15;
-      t.stroke_width_m = 0.04;
-    }
-    WindowGrid& w = t.windows;
-    w.enabled = true;
-    w.spacing_u = rng.Uniform(2.4, 3.6);
-    w.spacing_v = rng.Uniform(3.0, 3.5);
-    w.width = rng.Uniform(1.0, std::min(1.8, w.spacing_u - 0.6));
-    w.height = rng.Uniform(1.3, 1.9);
-    w.offset_u = 0.5 * (w.spacing_u - w.width);
-    w.offset_v = 0.9;
-    w.u_min = 0.8;
-    w.u_max = width - 0.8;
-    w.v_min = rng.Uniform(3.6, 4.6);  // ground floor without the grid
-    w.v_max = height - 0.8;
-    w.glass_albedo = static_cast<float>(rng.Uniform(0.06, 0.16));
-    w.frame_albedo = static_cast<float>(std::min(0.95, t.base + rng.Uniform(0.1, 0.3)));
-    w.frame_width = rng.Uniform(0.05, 0.12);
-    w.variation = textured ? 0.08f : 0.0f;
-    return t;
-  }
-
-  // Posters, signs, graffiti: dense high-contrast blobs and strokes.
-  SurfaceTexture Poster(float base) {
-    SurfaceTexture t;
-    t.seed = Seed();
-    t.base = base;
-    t.noise_amplitude = 0.05f;
-    t.noise_wavelength_m = 0.8;
-    t.blob_contrast = 0.3f;
-    t.blob_cell_m = 0.5;
-    t.blob_probability = 0.6;
-    t.blob_radius_m = 0.25;
-    t.stroke_contrast = 0.25f;
-    t.stroke_cell_m = 0.4;
-    t.stroke_probability = 0.5;
-    t.stroke_width_m = 0.02;
-    t.stroke_length_m = 0.35;
-    return t;
-  }
-
-  SurfaceTexture Noisy(float base, float amplitude, double wavelength) {
-    SurfaceTexture t;
-    t.seed = Seed();
-    t.base = base;
-    t.noise_amplitude = amplitude;
-    t.noise_wavelength_m = wavelength;
-    return t;
-  }
-
-  // A building whose street façade is face `facade` (box frame) of an axis-aligned box.
-  void Building(const Vec3& center, const Vec3& half, int facade, double facade_width, bool textured) {
-    const int front = scene.AddTexture(Facade(facade_width, 2.0 * half.z(), textured));
-    const int side = scene.AddTexture(SurfaceTexture::Uniform(static_cast<float>(rng.Uniform(0.3, 0.7))));
-    std::array<int, 6> faces;
-    faces.fill(side);
-    faces[facade] = front;
-    scene.AddBox(center, half, 0.0, faces);
-  }
-};
 
 SurfaceTexture GroundTexture(const SceneOptions& o, Rng& rng, bool repeated) {
   SurfaceTexture t;
@@ -284,6 +206,12 @@ Status SceneOptions::Validate() const {
   if (!(street_half_width_m >= 6.0 && street_half_width_m <= 50.0))
     return MakeError(ErrorCode::kInvalidArgument, "scene street half-width " + std::to_string(street_half_width_m) +
                                                       " m is outside [6, 50] m");
+  if (kind == Kind::kCity && !(city_blocks_x >= 1 && city_blocks_y >= 1 && city_blocks_x * city_blocks_y <= 100))
+    return MakeError(ErrorCode::kInvalidArgument, "scene: a city of " + std::to_string(city_blocks_x) + " x " +
+                                                      std::to_string(city_blocks_y) + " blocks; use 1 to 100 blocks");
+  if (kind == Kind::kCity && !(city_block_m >= 20.0 && city_block_m <= 200.0))
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "scene: city block " + std::to_string(city_block_m) + " m is outside [20, 200] m");
   if (!sphere_targets.empty() && !(sphere_target_radius_m >= 0.01 && sphere_target_radius_m <= 1.0))
     return MakeError(ErrorCode::kInvalidArgument, "scene: sphere target radius " +
                                                       std::to_string(sphere_target_radius_m) + " m is outside [0.01, 1] m");
@@ -305,13 +233,17 @@ Scene MakeScene(const SceneOptions& options) {
   o.street_half_width_m = std::clamp(o.street_half_width_m, 6.0, 50.0);
   const bool repeated = o.kind == SceneOptions::Kind::kRepeatedWindows;
   Scene scene;
-  Rng rng(sim::Hash(o.seed, repeated ? 2 : 1));
+  Rng rng(sim::Hash(o.seed, o.kind == SceneOptions::Kind::kCity ? 3 : repeated ? 2 : 1));
   Builder b{scene, rng, repeated};
-  // The ground: large enough that a scanner anywhere on the street sees ground to its max range.
-  scene.AddRectangle(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), 0.5 * o.street_length_m + 300.0, 300.0,
-                     scene.AddTexture(GroundTexture(o, rng, repeated)));
-  StreetBuildings(o, b);
-  StreetFurniture(o, b);  // real streets always hold some unique objects, even between identical façades
+  if (o.kind == SceneOptions::Kind::kCity) {
+    AddCity(o, scene, rng);
+  } else {
+    // The ground: large enough that a scanner anywhere on the street sees ground to its max range.
+    scene.AddRectangle(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), 0.5 * o.street_length_m + 300.0, 300.0,
+                       scene.AddTexture(GroundTexture(o, rng, repeated)));
+    StreetBuildings(o, b);
+    StreetFurniture(o, b);  // real streets always hold some unique objects, even between identical façades
+  }
   if (o.far_site) FarSite(b);
   if (!o.sphere_targets.empty()) {
     const int white = scene.AddTexture(SurfaceTexture::Uniform(0.85f)), pole = scene.AddTexture(SurfaceTexture::Uniform(0.3f));
