@@ -7,6 +7,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_georef.h"
 #include "app/cli_util.h"
+#include "core/common/skipped_pair.h"
 #include "core/geometry/transform.h"
 #include "core/io/project.h"
 #include "core/io/project_lock.h"
@@ -30,7 +31,10 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   std::printf("\n");
   for (int i = 0; i < n; ++i) {
     std::printf("%8s", scans[i].name.c_str());
-    for (int j = 0; j < n; ++j) std::printf(" %7d", r.confusion(i, j));
+    for (int j = 0; j < n; ++j) {
+      if (r.confusion(i, j) == kSkippedPair) std::printf(" %7s", "-");  // not a candidate pair
+      else std::printf(" %7d", r.confusion(i, j));
+    }
     std::printf("\n");
   }
   std::printf("\nscan order (root %s):\n", scans[r.root].name.c_str());
@@ -77,7 +81,9 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
                   g.down_weighted ? "  DOWN-WEIGHTED" : "");
     }
   }
-  std::printf("\ntime: features %.1f s (%d from cache), matching %.1f s, pairs %.1f s, total %.1f s\n",
+  std::printf("\npairs matched: %d of %d%s\n", r.pairs_matched, r.pairs_possible,
+              r.pairs_matched < r.pairs_possible ? " (candidate pairs; the others are - above)" : "");
+  std::printf("time: features %.1f s (%d from cache), matching %.1f s, pairs %.1f s, total %.1f s\n",
               r.seconds_features, r.features_from_cache, r.seconds_matching, r.seconds_pairs, r.seconds_total);
 }
 
@@ -87,7 +93,8 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
   json confusion = json::array();
   for (int i = 0; i < r.confusion.rows(); ++i) {
     json row = json::array();
-    for (int j = 0; j < r.confusion.cols(); ++j) row.push_back(r.confusion(i, j));
+    for (int j = 0; j < r.confusion.cols(); ++j)
+      row.push_back(r.confusion(i, j) == kSkippedPair ? json(nullptr) : json(r.confusion(i, j)));  // null: not matched
     confusion.push_back(row);
   }
   json links = json::array();
@@ -136,6 +143,8 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
               {"names", names},
               {"root", scans[r.root].name},
               {"confusion", confusion},
+              {"pairs_matched", r.pairs_matched},
+              {"pairs_possible", r.pairs_possible},
               {"links", links},
               {"seconds",
                {{"features", r.seconds_features},

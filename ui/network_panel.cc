@@ -12,6 +12,7 @@
 #include <map>
 #include <cmath>
 
+#include "core/common/skipped_pair.h"
 #include "core/io/project_tree.h"
 #include "ui/scan_cloud_actors.h"
 
@@ -276,7 +277,8 @@ void NetworkPanel::contextMenuEvent(QContextMenuEvent* event) {
     for (const auto& [neg, p] : candidates) {
       const io::ProjectScan& s = project_.scans[p];
       QString text = QString::fromStdString(s.name);
-      if (confusion) text += tr("  (%n match(es))", "", -neg);
+      if (confusion && neg == -kSkippedPair) text += tr("  (not matched)");
+      else if (confusion) text += tr("  (%n match(es))", "", -neg);
       if (s.name == current) text += tr("  — current parent");
       if (!s.registered) text += tr("  — not registered");
       const QString name = QString::fromStdString(s.name);

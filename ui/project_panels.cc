@@ -5,6 +5,7 @@
 #include <QTime>
 #include <cmath>
 
+#include "core/common/skipped_pair.h"
 #include "core/geometry/transform.h"
 #include "core/io/project_tree.h"
 
@@ -144,9 +145,15 @@ void ConfusionPanel::Show(const Eigen::MatrixXi& confusion, const std::vector<st
       if (i != j) max_off = std::max(max_off, confusion(i, j));
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
-      QTableWidgetItem* item = Item(QString::number(confusion(i, j)), Qt::AlignCenter);
+      const bool skipped = i != j && confusion(i, j) == kSkippedPair;
+      QTableWidgetItem* item = Item(skipped ? QString("–") : QString::number(confusion(i, j)), Qt::AlignCenter);
       if (i == j) {
         item->setBackground(QColor(210, 210, 210));
+      } else if (skipped) {
+        item->setBackground(QColor(240, 240, 240));
+        item->setForeground(QColor(150, 150, 150));
+        item->setToolTip(tr("Not matched: not among the candidate pairs (setting register.candidates; 0 matches "
+                            "every pair). Registering the pair by hand still matches it."));
       } else {
         const double f = double(confusion(i, j)) / max_off;  // white -> deep blue
         item->setBackground(QColor::fromRgbF(1.0 - 0.8 * f, 1.0 - 0.6 * f, 1.0));

@@ -44,6 +44,14 @@ const PairMatches* MatchTable::Find(int i, int j) const {
 
 Expected<MatchTable> MatchAllPairs(const std::vector<ScanFeatures>& scans, const MatchOptions& options,
                                    ProgressSink& progress, const CancelToken& cancel) {
+  std::vector<std::pair<int, int>> all;
+  for (int i = 0; i < static_cast<int>(scans.size()); ++i)
+    for (int j = i + 1; j < static_cast<int>(scans.size()); ++j) all.emplace_back(i, j);
+  return MatchPairs(scans, all, options, progress, cancel);
+}
+
+Expected<MatchTable> MatchPairs(const std::vector<ScanFeatures>& scans, const std::vector<std::pair<int, int>>& pairs,
+                                const MatchOptions& options, ProgressSink& progress, const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
   const int n = static_cast<int>(scans.size());
   for (int i = 0; i < n; ++i)
@@ -54,17 +62,23 @@ Expected<MatchTable> MatchAllPairs(const std::vector<ScanFeatures>& scans, const
                                                         std::to_string(scans[i].keypoints.size()) +
                                                         " keypoints; re-run feature detection");
   MatchTable table;
-  table.confusion = Eigen::MatrixXi::Zero(n, n);
+  table.confusion = Eigen::MatrixXi::Constant(n, n, kSkippedPair);
   for (int i = 0; i < n; ++i) table.confusion(i, i) = scans[i].size();
   if (n < 2) return table;
   table.pairs.resize(static_cast<std::size_t>(n) * (n - 1));
 
-  // Unordered pairs {i < j}: one task matches both directions (for kExact from one product).
-  const long num_tasks = static_cast<long>(n) * (n - 1) / 2;
+  // Unordered pairs {i < j}, each once: one task matches both directions (for kExact from one product).
   std::vector<std::pair<int, int>> tasks;
-  tasks.reserve(static_cast<std::size_t>(num_tasks));
-  for (int i = 0; i < n; ++i)
-    for (int j = i + 1; j < n; ++j) tasks.emplace_back(i, j);
+  for (const auto& [a, b] : pairs) {
+    if (a < 0 || b < 0 || a >= n || b >= n || a == b)
+      return MakeError(ErrorCode::kInvalidArgument, "matching: pair (" + std::to_string(a) + ", " +
+                                                        std::to_string(b) + ") is not a pair of the " +
+                                                        std::to_string(n) + " scans");
+    tasks.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  std::sort(tasks.begin(), tasks.end());
+  tasks.erase(std::unique(tasks.begin(), tasks.end()), tasks.end());
+  const long num_tasks = static_cast<long>(tasks.size());
   StepProgress steps(progress, n + num_tasks, "Matching features");
   std::atomic<bool> cancelled{false};
   std::mutex error_mutex;
@@ -115,7 +129,7 @@ Expected<MatchTable> MatchAllPairs(const std::vector<ScanFeatures>& scans, const
   if (!error.empty()) return MakeError(ErrorCode::kFailed, error);
   if (cancelled) return MakeError(ErrorCode::kCancelled, "feature matching was cancelled");
   for (const PairMatches& pm : table.pairs)
-    table.confusion(pm.query_scan, pm.train_scan) = static_cast<int>(pm.matches.size());
+    if (pm.query_scan >= 0) table.confusion(pm.query_scan, pm.train_scan) = static_cast<int>(pm.matches.size());
   return table;
 }
 

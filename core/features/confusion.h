@@ -5,9 +5,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "core/common/expected.h"
+#include "core/common/skipped_pair.h"
 #include "core/common/progress.h"
 #include "core/features/matching.h"
 #include "core/features/sift.h"
@@ -34,6 +36,11 @@ struct MatchTable {
 // descriptors do not match its keypoints, kCancelled when cancelled.
 Expected<MatchTable> MatchAllPairs(const std::vector<ScanFeatures>& scans, const MatchOptions& options,
                                    ProgressSink& progress, const CancelToken& cancel);
+
+// The same for the given unordered pairs only (each listed once or twice, either way round): the
+// others are left out, with C(i, j) = kSkippedPair and empty matches.
+Expected<MatchTable> MatchPairs(const std::vector<ScanFeatures>& scans, const std::vector<std::pair<int, int>>& pairs,
+                                const MatchOptions& options, ProgressSink& progress, const CancelToken& cancel);
 
 // Only the confusion matrix of MatchAllPairs.
 Expected<Eigen::MatrixXi> ConfusionMatrix(const std::vector<ScanFeatures>& scans, const MatchOptions& options,

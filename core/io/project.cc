@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/common/atomic_file.h"
+#include "core/common/skipped_pair.h"
 #include "core/geometry/transform.h"
 #include "core/io/json_fields.h"
 #include "core/io/project_georef.h"
@@ -132,7 +133,7 @@ Status ConfusionFromJson(const json& j, const std::string& where, Project* proje
   const Error bad =
       MakeError(ErrorCode::kParseError, where +
                                             ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
-                                            "non-negative integers per scan); delete it and register again");
+                                            "non-negative integers or null per scan); delete it and register again");
   if (!j.is_object() || !j.contains("scans") || !j.contains("matches")) return bad;
   const json& names = j["scans"];
   const json& rows = j["matches"];
@@ -143,7 +144,13 @@ Status ConfusionFromJson(const json& j, const std::string& where, Project* proje
     if (!names[i].is_string() || !rows[i].is_array() || rows[i].size() != n) return bad;
     project->confusion_scans.push_back(names[i].get<std::string>());
     for (std::size_t k = 0; k < n; ++k) {
-      if (!rows[i][k].is_number_integer() || rows[i][k].get<long long>() < 0) return bad;
+      if (rows[i][k].is_null()) {  // a pair left out of the candidate pairs
+        c(i, k) = kSkippedPair;
+        continue;
+      }
+      if (!rows[i][k].is_number_integer() || rows[i][k].get<long long>() < 0 ||
+          rows[i][k].get<long long>() > (1LL << 31) - 1)
+        return bad;
       c(i, k) = rows[i][k].get<int>();
     }
   }
@@ -375,7 +382,10 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
     json rows = json::array();
     for (int i = 0; i < confusion->rows(); ++i) {
       json row = json::array();
-      for (int k = 0; k < confusion->cols(); ++k) row.push_back((*confusion)(i, k));
+      for (int k = 0; k < confusion->cols(); ++k) {
+        if ((*confusion)(i, k) == kSkippedPair) row.push_back(nullptr);
+        else row.push_back((*confusion)(i, k));
+      }
       rows.push_back(std::move(row));
     }
     j["confusion"] = json{{"scans", project.confusion_scans}, {"matches", std::move(rows)}};

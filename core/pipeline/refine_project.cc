@@ -28,16 +28,6 @@ double Since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Fraction of the child's samples (at most 2,000, evenly) with a parent sample within d.
-double Overlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
-               const Eigen::Isometry3d& parent_from_child, double d) {
-  const std::vector<Eigen::Vector3d> pts = ThinEvenly(child_samples, 2000);
-  if (pts.empty()) return 0.0;
-  int near = 0;
-  for (const Eigen::Vector3d& p : pts) near += parent.Nearest(parent_from_child * p, d) >= 0;
-  return double(near) / double(pts.size());
-}
-
 }  // namespace
 
 Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& scans, const UserChoices& user,
@@ -92,7 +82,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     for (int j = 0; j < n; ++j) {
       if (i == j) continue;
       const Eigen::Isometry3d rel = scans[i].world_from_scan.inverse() * scans[j].world_from_scan;
-      overlap(i, j) = Overlap(*index[i], prepared[j].samples, rel, options.overlap_distance_m);
+      overlap(i, j) = SampleOverlap(*index[i], prepared[j].samples, rel, options.overlap_distance_m);
       result.confusion(i, j) = static_cast<int>(std::lround(1000 * overlap(i, j)));
     }
   result.seconds_matching = Since(t_overlap);

@@ -63,6 +63,8 @@ RegisterOptions::RegisterOptions() {
 }
 
 Status RegisterOptions::Validate() const {
+  if (candidates < 0)
+    return MakeError(ErrorCode::kInvalidArgument, "candidate partners per scan must be 0 (every pair) or more");
   if (Status s = spheres.Validate(); !s) return s;
   if (checkers.size_m != 0)
     if (Status s = checkers.Validate(); !s) return s;

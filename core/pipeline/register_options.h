@@ -102,6 +102,11 @@ struct RegisterOptions {
   // scans and parent overrides): only these scans are placed; every other registered scan keeps its
   // pose and its links and anchors the run. Empty: every scan.
   std::vector<std::string> only_scans;
+  // Candidate pairs (issue 13, item 3): each scan's features are matched only with its `candidates`
+  // most similar scans by a global descriptor (VLAD over SIFT and FPFH, core/pipeline/candidate_pairs.h),
+  // its neighbours in capture order and the user's pairs; 0 matches every pair (W). Pairs left out
+  // show as skipped in the confusion matrix; the driver matches one on demand when it needs it.
+  int candidates = 10;
   std::optional<std::string> root;          // scan name; default: tail of the heaviest edge
   std::filesystem::path feature_cache_dir;  // empty: no cache
   // Georeferencing (issue 15), when the project has control points: the sphere and checkerboard

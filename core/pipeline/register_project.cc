@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "core/common/log.h"
@@ -13,8 +14,11 @@
 #include "core/features/feature_cache.h"
 #include "core/features/matching.h"
 #include "core/geometry/transform.h"
+#include "core/pipeline/candidate_pairs.h"
 #include "core/pipeline/georeference_project.h"
+#include "core/pipeline/refine_pair.h"
 #include "core/pipeline/refine_project.h"
+#include "core/registration/point_index.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
 #include "core/pipeline/scale_defaults.h"
@@ -128,6 +132,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
                                             const CancelToken& cancel) {
   if (Status s = raw_options.Validate(); !s) return s.error();
   const int n = static_cast<int>(scans.size());
+  NullProgress null_progress;
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
   for (const Scan& s : scans) {
     if (s.CountValid() == 0) {
@@ -172,21 +177,35 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   }
   result.seconds_features = Since(t0);
 
-  // W §2 steps 2-3: matching and the confusion matrix; FPFH matches of every pair (parent i < child j).
+  // W §2 steps 2-3: matching and the confusion matrix, over the candidate pairs (issue 13, item 3:
+  // every pair when options.candidates is 0); FPFH matches of the same pairs (parent i < child j).
   t0 = std::chrono::steady_clock::now();
+  std::vector<std::pair<int, int>> required;  // the user's pairs: always matched
+  for (int i = 0; i < n; ++i)
+    if (choices->overrides[i]) required.emplace_back(*choices->overrides[i], i);
+  for (const auto& [key, link] : choices->kept) required.push_back(key);
+  const bool select = options.candidates > 0 && options.candidates < n - 1;
+  std::vector<bool> has_features(n);
+  for (int i = 0; i < n; ++i) has_features[i] = prepared[i].features.size() >= 2;
+  const std::vector<std::pair<int, int>> pairs =
+      CandidatePairs(select ? CandidateVotes(prepared, options.match.ratio) : Eigen::MatrixXi::Zero(n, n), has_features,
+                     options.candidates, required);
+  result.pairs_matched = static_cast<int>(pairs.size());
+  result.pairs_possible = n * (n - 1) / 2;
+  if (result.pairs_matched < result.pairs_possible)
+    LogInfo("matching " + std::to_string(result.pairs_matched) + " candidate pairs of " +
+            std::to_string(result.pairs_possible) + " (" + std::to_string(options.candidates) +
+            " best-voted scans each, neighbours in capture order, the user's pairs)");
   std::vector<ScanFeatures> features;
   for (const PreparedScan& p : prepared) features.push_back(p.features);
   SubProgress match_progress(progress, 0.3, 0.5);
-  Expected<MatchTable> table = MatchAllPairs(features, options.match, match_progress, cancel);
+  Expected<MatchTable> table = MatchPairs(features, pairs, options.match, match_progress, cancel);
   if (!table) return table.error();
   result.confusion = table->confusion;
   std::map<std::pair<int, int>, std::vector<GeometricMatch>> geometric_matches;
   Eigen::MatrixXi weights = result.confusion;
   if (UsesGeometric(options.features)) {
     // Every pair on its own (concurrently), then gathered in pair order.
-    std::vector<std::pair<int, int>> pairs;
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) pairs.emplace_back(i, j);
     std::vector<std::vector<GeometricMatch>> pair_matches(pairs.size());
     std::vector<int> pair_weight(pairs.size(), 0);
 #pragma omp parallel for schedule(dynamic, 4)
@@ -207,20 +226,64 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   result.seconds_matching = Since(t0);
   const auto geometric_of = [&](int parent, int child) {
     std::vector<GeometricMatch> out;
-    const auto it = geometric_matches.find({std::min(parent, child), std::max(parent, child)});
-    if (it == geometric_matches.end()) return out;
-    out = it->second;
+    const int a = std::min(parent, child), b = std::max(parent, child);
+    const auto it = geometric_matches.find({a, b});
+    if (it != geometric_matches.end()) {
+      out = it->second;
+    } else if (UsesGeometric(options.features)) {  // a pair left out of the candidates: matched now
+      out = MatchGeometric(prepared[a].geometric, prepared[b].geometric);
+    }
     if (parent > child)
       for (GeometricMatch& g : out) std::swap(g.parent, g.child);
     return out;
+  };
+  // The SIFT matches of a pair both ways; a pair left out of the candidates (the driver tries it by
+  // position) is matched when asked for.
+  const auto sift_of = [&](int parent, int child) {
+    if (table->confusion(parent, child) != kSkippedPair) return BothWays(*table, parent, child);
+    Expected<MatchTable> one = MatchPairs({features[parent], features[child]}, {{0, 1}}, options.match, null_progress, cancel);
+    return one ? BothWays(*one, 0, 1) : std::vector<FeatureMatch>();
   };
 
   LinkSource source;
   source.weights = weights;
   source.register_pair = [&](int parent, int child) {
-    return RegisterPair(prepared[parent], prepared[child], BothWays(*table, parent, child), geometric_of(parent, child),
+    return RegisterPair(prepared[parent], prepared[child], sift_of(parent, child), geometric_of(parent, child),
                         options, cancel);
   };
+  // The pairs overlapping at the registered poses (whether matched or not) become links of the global
+  // step, refined from those poses: bounding spheres first, then SampleOverlap on the voxel samples
+  // within 3 overlap distances (the samples are a voxel of one overlap distance apart).
+  std::vector<std::unique_ptr<PointIndex>> sample_index(n);
+  const double reach = 3.0 * options.overlap_distance_m;
+  source.overlap_at = [&](const std::vector<Eigen::Isometry3d>& world, const std::vector<bool>& placed) {
+    Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);
+    std::vector<double> radius(n, 0.0);
+    for (int i = 0; i < n; ++i)
+      for (const Eigen::Vector3d& p : prepared[i].samples) radius[i] = std::max(radius[i], p.norm());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int i = 0; i < n; ++i)
+      if (placed[i] && !sample_index[i]) sample_index[i] = std::make_unique<PointIndex>(prepared[i].samples);
+    std::vector<std::pair<int, int>> near;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        if (placed[i] && placed[j] && (world[i].translation() - world[j].translation()).norm() < radius[i] + radius[j])
+          near.emplace_back(i, j);
+#pragma omp parallel for schedule(dynamic, 8)
+    for (long k = 0; k < static_cast<long>(near.size()); ++k) {
+      const auto [i, j] = near[k];
+      const Eigen::Isometry3d i_from_j = world[i].inverse() * world[j];
+      overlap(i, j) = SampleOverlap(*sample_index[i], prepared[j].samples, i_from_j, reach);
+      overlap(j, i) = SampleOverlap(*sample_index[j], prepared[i].samples, i_from_j.inverse(), reach);
+    }
+    return overlap;
+  };
+  source.refine_pair = [&](int parent, int child, const Eigen::Isometry3d& parent_from_child) {
+    PairResult r;
+    r.link = RefinePair(prepared[parent], prepared[child], parent_from_child, options, options.overlap_distance_m, cancel);
+    return r;
+  };
+  source.extra_overlap = options.thresholds.weak_overlap;  // as RegisterFromCurrentPoses
   source.min_check_weight = options.min_check_matches;
   source.position_partners = 3;
   source.clusters = true;

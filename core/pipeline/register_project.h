@@ -51,6 +51,12 @@ struct ProjectRegistration {
   bool georeferenced = false;
   std::string georef_error;
   int features_from_cache = 0;
+  // Candidate pairs (options.candidates): the unordered pairs whose features were matched up front,
+  // of all n (n - 1) / 2; the others are kSkippedPair in the confusion matrix.
+  int pairs_matched = 0, pairs_possible = 0;
+  // The pairs found overlapping at the registered poses and refined from them for the global step
+  // (parent, child), whether their features were matched or not.
+  std::vector<std::pair<int, int>> pairs_by_overlap;
   double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
 };
 

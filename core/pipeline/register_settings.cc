@@ -76,6 +76,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.checker_size_m", "checker-size", "checkerboard target size (m; 0: none)", {}},
       {"register.control_tolerance_m", "control-tolerance", "control residual tolerance (m)", {}},
       {"register.levelled_deg", "levelled", "levelled scans: accuracy (°; 0: not levelled)", {}},
+      {"register.candidates", "candidates", "partners matched per scan (0: every pair)", {}},
   };
   return all;
 }
@@ -94,6 +95,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.checker_size_m") return Number(o.checkers.size_m);
   if (key == "register.control_tolerance_m") return Number(o.georef.tolerance_m);
   if (key == "register.levelled_deg") return Number(o.georef.levelled_sigma_rad * 180.0 / M_PI);
+  if (key == "register.candidates") return std::to_string(o.candidates);
   return "";
 }
 
@@ -134,6 +136,13 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
     double deg = 0;
     if (Status st = SetNumber(s, value, 0.0, 5.0, &deg); !st) return st;
     o->georef.levelled_sigma_rad = deg * M_PI / 180.0;
+    return Status::Ok();
+  }
+  if (key == "register.candidates") {
+    double k = 0;
+    if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
+    if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: every pair)");
+    o->candidates = static_cast<int>(k);
     return Status::Ok();
   }
   return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");

@@ -62,20 +62,42 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::pair<int, int>> excluded = choices.excluded;
 
-  // Each ordered pair is registered at most once.
-  std::map<std::pair<int, int>, PairResult> done;
+  // Each ordered pair is registered at most once. Pairs the tree or its checks will ask for next are
+  // registered ahead, concurrently (issue 13, item 4), and wait in `ahead` until the walk reaches
+  // them: the walk, and so the result, is the same whatever the thread count.
+  std::map<std::pair<int, int>, PairResult> done, ahead;
+  auto register_ahead = [&](const std::vector<std::pair<int, int>>& wanted) {
+    std::vector<std::pair<int, int>> todo;
+    for (const auto& e : wanted)
+      if (!done.count(e) && !ahead.count(e) && !choices.kept.count(e) &&
+          std::find(todo.begin(), todo.end(), e) == todo.end())
+        todo.push_back(e);
+    if (todo.size() < 2 || cancel.IsCancelled()) return;  // nothing to share between threads
+    progress.Report(std::min(1.0, double(done.size()) / (2.0 * std::max(1, n - 1))),
+                    std::string(source.verb) + " " + std::to_string(todo.size()) + " pairs");
+    std::vector<PairResult> results(todo.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long k = 0; k < static_cast<long>(todo.size()); ++k)
+      if (!cancel.IsCancelled()) results[k] = source.register_pair(todo[k].first, todo[k].second);
+    if (cancel.IsCancelled()) return;
+    for (std::size_t k = 0; k < todo.size(); ++k) ahead.emplace(todo[k], std::move(results[k]));
+  };
   auto link = [&](int parent, int child) -> PairResult& {
     auto it = done.find({parent, child});
     if (it != done.end()) return it->second;
     progress.Report(std::min(1.0, double(done.size()) / (2.0 * std::max(1, n - 1))),
                     std::string(source.verb) + " " + scans[child].name + " to " + scans[parent].name);
     const auto kept = choices.kept.find({parent, child});
-    PairResult kept_result;
-    if (kept != choices.kept.end()) kept_result.link = kept->second;
-    PairResult& r = done.emplace(std::make_pair(parent, child), kept != choices.kept.end()
-                                                                    ? kept_result
-                                                                    : source.register_pair(parent, child))
-                        .first->second;
+    PairResult computed;
+    if (kept != choices.kept.end()) {
+      computed.link = kept->second;
+    } else if (auto a = ahead.find({parent, child}); a != ahead.end()) {
+      computed = std::move(a->second);
+      ahead.erase(a);
+    } else {
+      computed = source.register_pair(parent, child);
+    }
+    PairResult& r = done.emplace(std::make_pair(parent, child), std::move(computed)).first->second;
     if (kept != choices.kept.end()) LogInfo(scans[child].name + " keeps its link to " + scans[parent].name + " (the user's)");
     LogInfo(scans[child].name + " -> " + scans[parent].name + ": " + io::LinkStatusName(r.link.status) +
             (r.link.reason.empty() ? "" : " (" + r.link.reason + ")"));
@@ -121,6 +143,10 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     Expected<ScanOrder> o = ComputeScanOrder(weights, choices.root, choices.overrides, excluded, source.min_weight);
     if (!o) return o.error();
     order = *o;
+    std::vector<std::pair<int, int>> tree_edges;
+    for (int child : order.order)
+      if (order.parent[child] >= 0) tree_edges.emplace_back(order.parent[child], child);
+    register_ahead(tree_edges);
     bool changed = false;
     for (int child : order.order) {
       const int parent = order.parent[child];
@@ -142,16 +168,15 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
     // Loop check (beyond W): register each scan also to its best other placed neighbour and compare
     // with the tree. Both links of a cycle that does not close are failed: a pairwise registration
     // can be self-consistent and wrong (repeated façades), a closed loop rarely is.
-    for (int child : order.order) {
-      const int parent = order.parent[child];
-      if (parent < 0) continue;
-      if (choices.kept.count({parent, child})) continue;  // the user's link: never failed by a check
-      const bool needs_loop = done.at({parent, child}).needs_loop;
-      const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
-      if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
-      // Check partners, best first: the best one only, or every one until a loop closes when the
-      // link needs one.
+    // The links to check and, for each, its check partners best first: the best one only, or every
+    // one until a loop closes when the link needs one.
+    const bool check_all = options.verify_all_links || options.global;  // the graph needs the extra links
+    auto check_partners = [&](int child) {
       std::vector<std::pair<int, int>> partners;  // (-weight, scan)
+      const int parent = order.parent[child];
+      if (parent < 0 || choices.kept.count({parent, child})) return partners;  // the user's link: never failed by a check
+      const bool needs_loop = done.at({parent, child}).needs_loop;
+      if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) return partners;
       for (int q : order.order) {
         if (q == child || q == parent || order.parent[q] == child) continue;
         if (Contains(excluded, q, child)) continue;
@@ -160,6 +185,24 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
       }
       std::stable_sort(partners.begin(), partners.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
       if (!needs_loop && partners.size() > 1) partners.resize(1);
+      return partners;
+    };
+    std::vector<std::pair<int, int>> first_checks;  // each link's first check, unless the reverse serves
+    for (int child : order.order) {
+      const std::vector<std::pair<int, int>> partners = check_partners(child);
+      if (partners.empty()) continue;
+      const auto reverse = done.find({child, partners.front().second});
+      if (reverse == done.end() || reverse->second.link.status == io::LinkStatus::kFailed)
+        first_checks.emplace_back(partners.front().second, child);
+    }
+    register_ahead(first_checks);
+    for (int child : order.order) {
+      const int parent = order.parent[child];
+      if (parent < 0) continue;
+      if (choices.kept.count({parent, child})) continue;  // the user's link: never failed by a check
+      const bool needs_loop = done.at({parent, child}).needs_loop;
+      if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
+      const std::vector<std::pair<int, int>> partners = check_partners(child);
       bool closed = false, open = false;
       for (const auto& [neg_weight, best] : partners) {
         // A check already made the other way round serves (inverted).
@@ -302,19 +345,44 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
           return true;
       return false;
     };
-    for (int i = 0; i < source.overlap.rows(); ++i)
-      for (int j = i + 1; j < source.overlap.cols(); ++j) {
+    const bool at_poses = source.overlap.size() == 0 && source.overlap_at && source.refine_pair;
+    Eigen::MatrixXd overlap = source.overlap;
+    std::vector<bool> placed(n);
+    std::vector<Eigen::Isometry3d> placed_world(n);
+    for (int i = 0; i < n; ++i) {
+      placed[i] = result->scans[i].registered;
+      placed_world[i] = result->scans[i].world_from_scan;
+    }
+    if (at_poses) overlap = source.overlap_at(placed_world, placed);
+    std::vector<std::pair<int, int>> extra;  // (parent, child): the larger overlap's scan is the parent
+    for (int i = 0; i < overlap.rows(); ++i)
+      for (int j = i + 1; j < overlap.cols(); ++j) {
         if (order.parent[j] == i || order.parent[i] == j || linked(i, j)) continue;
-        if (!result->scans[i].registered || !result->scans[j].registered) continue;
-        if (std::max(source.overlap(i, j), source.overlap(j, i)) < source.extra_overlap) continue;
+        if (!placed[i] || !placed[j]) continue;
+        if (std::max(overlap(i, j), overlap(j, i)) < source.extra_overlap) continue;
         if (Contains(excluded, i, j)) continue;
-        if (cancel.IsCancelled()) return Cancelled();
-        const bool i_parent = source.overlap(i, j) >= source.overlap(j, i);
-        io::LinkRecord l = (i_parent ? link(i, j) : link(j, i)).link;
-        if (l.status == io::LinkStatus::kFailed) continue;
-        l.loop_check = true;
-        result->links.push_back(l);
+        extra.push_back(overlap(i, j) >= overlap(j, i) ? std::make_pair(i, j) : std::make_pair(j, i));
       }
+    if (cancel.IsCancelled()) return Cancelled();
+    std::vector<PairResult> refined(at_poses ? extra.size() : 0);
+    if (at_poses) {  // independent refinements from the registered poses, concurrently
+      progress.Report(1.0, "refining " + std::to_string(extra.size()) + " more overlapping pairs for the global step");
+#pragma omp parallel for schedule(dynamic, 1)
+      for (long k = 0; k < static_cast<long>(extra.size()); ++k) {
+        if (cancel.IsCancelled()) continue;
+        const auto [p, c] = extra[k];
+        refined[k] = source.refine_pair(p, c, placed_world[p].inverse() * placed_world[c]);
+      }
+      if (cancel.IsCancelled()) return Cancelled();
+      result->pairs_by_overlap = extra;
+    }
+    for (std::size_t k = 0; k < extra.size(); ++k) {
+      if (cancel.IsCancelled()) return Cancelled();
+      io::LinkRecord l = at_poses ? refined[k].link : link(extra[k].first, extra[k].second).link;
+      if (l.status == io::LinkStatus::kFailed) continue;
+      l.loop_check = true;
+      result->links.push_back(l);
+    }
     if (Status g = RunGlobalRegistration(scans, cancel, result); !g) return g;
     // The user's links hold exactly: the graph may not bend them. Parents first, each kept child
     // and the scans under it move back onto its link.

@@ -37,6 +37,12 @@ struct LinkSource {
   // overlap's scan as the parent.
   Eigen::MatrixXd overlap;
   double extra_overlap = 0.0;
+  // Without `overlap` (links from feature matches): the overlap at the registered poses, computed once
+  // the tree has placed the scans (placed[i]: scan i is registered), and the refinement of a pair
+  // from those poses (parent_from_child). Every other pair overlapping by extra_overlap is refined
+  // and joins the global step (issue 13, item 3: the pairs candidate selection did not match).
+  std::function<Eigen::MatrixXd(const std::vector<Eigen::Isometry3d>& world, const std::vector<bool>& placed)> overlap_at;
+  std::function<PairResult(int parent, int child, const Eigen::Isometry3d& parent_from_child)> refine_pair;
   // Whether pair results carry a coarse pose (W fig. 6 "after coarse"), and the reason given to a
   // scan no link reaches.
   bool has_coarse = true;

@@ -6,6 +6,8 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include "core/registration/voxel_filter.h"
+
 namespace scanreg {
 
 struct PointIndex::Impl {
@@ -54,6 +56,15 @@ std::vector<int> PointIndex::KNearest(const Eigen::Vector3d& query, int k) const
   std::vector<float> dist(k);
   const int found = impl_->tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), k, idx, dist);
   return std::vector<int>(idx.begin(), idx.begin() + std::max(found, 0));
+}
+
+double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
+                     const Eigen::Isometry3d& parent_from_child, double distance_m) {
+  const std::vector<Eigen::Vector3d> pts = ThinEvenly(child_samples, 2000);
+  if (pts.empty()) return 0.0;
+  int near = 0;
+  for (const Eigen::Vector3d& p : pts) near += parent.Nearest(parent_from_child * p, distance_m) >= 0;
+  return double(near) / double(pts.size());
 }
 
 }  // namespace scanreg

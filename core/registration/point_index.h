@@ -2,7 +2,7 @@
 // that callers do not pay PCL's compile time). Queries are const and thread-safe.
 #pragma once
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 #include <vector>
 
@@ -26,5 +26,10 @@ class PointIndex {
   std::unique_ptr<Impl> impl_;
   std::size_t size_ = 0;
 };
+
+// Overlap of a child with a parent at a relative pose: the fraction of the child's samples (at most
+// 2,000, evenly) with a parent point within distance_m. 0 without samples.
+double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
+                     const Eigen::Isometry3d& parent_from_child, double distance_m);
 
 }  // namespace scanreg

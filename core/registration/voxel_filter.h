@@ -11,12 +11,12 @@ namespace scanreg {
 // The scan's valid points in double precision, scanner frame, in cell order.
 std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan);
 
-// Centroids of the points in each occupied voxel (cubes aligned to the frame's origin), in the order
-// in which the voxels are first hit. voxel_m <= 0 returns the finite input points unchanged.
-// Non-finite points are skipped.
 // At most max_count of the points, taken at an even stride (all of them when max_count <= 0).
 std::vector<Eigen::Vector3d> ThinEvenly(std::vector<Eigen::Vector3d> points, int max_count);
 
+// Centroids of the points in each occupied voxel (cubes aligned to the frame's origin), in the order
+// in which the voxels are first hit. voxel_m <= 0 returns the finite input points unchanged.
+// Non-finite points are skipped.
 std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>& points, double voxel_m);
 
 }  // namespace scanreg

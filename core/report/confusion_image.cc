@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 
+#include "core/common/skipped_pair.h"
 #include "core/report/canvas.h"
 
 namespace scanreg::report {
@@ -25,7 +26,10 @@ cv::Mat DrawConfusionHeatMap(const Eigen::MatrixXi& confusion, const std::vector
       const cv::Rect r(left + j * cell, top + i * cell, cell, cell);
       cv::Scalar fill(210, 210, 210);
       bool dark = false;
-      if (i != j) {
+      const bool skipped = i != j && confusion(i, j) == kSkippedPair;
+      if (skipped) {
+        fill = cv::Scalar(240, 240, 240);  // not matched: pale grey, a dash
+      } else if (i != j) {
         const double f = std::clamp(double(confusion(i, j)) / max_off, 0.0, 1.0);
         fill = cv::Scalar(255, 255 * (1.0 - 0.6 * f), 255 * (1.0 - 0.8 * f));  // BGR: white -> deep blue
         dark = f > 0.6;
@@ -33,7 +37,7 @@ cv::Mat DrawConfusionHeatMap(const Eigen::MatrixXi& confusion, const std::vector
       cv::rectangle(image, r, fill, cv::FILLED);
       cv::rectangle(image, r, cv::Scalar(190, 190, 190), 1);
       if (counts) {
-        const std::string text = std::to_string(confusion(i, j));
+        const std::string text = skipped ? "-" : std::to_string(confusion(i, j));
         const double scale = std::min(0.45, 0.45 * (cell - 6) / std::max(TextSize(text, 0.45).width, 1));
         DrawTextCentered(image, text, {r.x + cell / 2, r.y + cell / 2}, scale, dark ? kWhite : kInk);
       }

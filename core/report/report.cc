@@ -6,6 +6,7 @@
 
 #include "core/common/atomic_file.h"
 #include "core/common/output_set.h"
+#include "core/common/skipped_pair.h"
 #include "core/geometry/pose_angles.h"
 #include "core/geometry/transform.h"
 #include "core/io/project_tree.h"
@@ -124,11 +125,20 @@ std::string ConfusionSection(const io::Project& p, const std::filesystem::path& 
   *status = WritePng(DrawConfusionHeatMap(ordered, names), dir / kConfusionPng);
   std::string listed;
   for (const std::string& name : names) listed += (listed.empty() ? "" : ", ") + Escape(name);
+  int skipped = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) skipped += ordered(i, j) == kSkippedPair && ordered(j, i) == kSkippedPair;
+  const std::string skipped_text =
+      skipped == 0 ? std::string()
+                   : " <span id=\"skipped-pairs\">" + std::to_string(skipped) + " of " + std::to_string(n * (n - 1) / 2) +
+                         " pairs were not matched</span> (shown as -): neither scan ranked the other among its most "
+                         "similar scans by global descriptors, nor were they neighbours in capture order or linked by "
+                         "the user (setting register.candidates; 0 matches every pair).";
   return html +
          "<p>C(i, j): matches of scan i's SIFT features in scan j (ratio test, W §2 step 3); diagonal: "
          "features of scan i. Rows and columns in scan order (the root, then each scan as the registration "
          "placed it): <span id=\"scan-order\">" +
-         listed + "</span>.</p>\n" + Image(kConfusionPng, "confusion matrix heat map");
+         listed + "</span>." + skipped_text + "</p>\n" + Image(kConfusionPng, "confusion matrix heat map");
 }
 
 std::string NetworkSection(const io::Project& p, const std::filesystem::path& dir, Status* status) {

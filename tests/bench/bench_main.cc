@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
       {"export", scanreg::bench::RunExportBench},
       {"em", scanreg::bench::RunEmBench}, {"global", scanreg::bench::RunGlobalBench},
       {"geometric", scanreg::bench::RunGeometricBench}, {"hard", scanreg::bench::RunHardBench},
-      {"georef", scanreg::bench::RunGeorefBench}};
+      {"georef", scanreg::bench::RunGeorefBench}, {"city", scanreg::bench::RunCityBench}};
   bool quick = false;
   std::vector<std::string> chosen;
   for (int i = 1; i < argc; ++i) {
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
       chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef ...]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef|city ...]\n");
       return 2;
     }
   }

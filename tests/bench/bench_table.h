@@ -46,5 +46,6 @@ void RunGlobalBench(Table& table, bool quick);
 void RunGeometricBench(Table& table, bool quick);
 void RunHardBench(Table& table, bool quick);
 void RunGeorefBench(Table& table, bool quick);
+void RunCityBench(Table& table, bool quick);
 
 }  // namespace scanreg::bench

@@ -163,5 +163,33 @@ TEST(ConfusionTest, CancelledAndBadInputAreReported) {
   EXPECT_TRUE(one->pairs.empty());
 }
 
+TEST(ConfusionTest, ChosenPairsMatchAsInTheFullTableAndTheOthersAreSkipped) {
+  const auto& features = SmallProjectFeatures();
+  ASSERT_GE(features.size(), 3u);
+  NullProgress progress;
+  CancelToken go;
+  const auto all = MatchAllPairs(features, MatchOptions(), progress, go);
+  ASSERT_TRUE(all.ok());
+  const int n = static_cast<int>(features.size());
+  const auto some = MatchPairs(features, {{1, 0}, {0, 1}, {1, 2}}, MatchOptions(), progress, go);
+  ASSERT_TRUE(some.ok());
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const bool chosen = i == j || (std::min(i, j) == 0 && std::max(i, j) == 1) || (std::min(i, j) == 1 && std::max(i, j) == 2);
+      if (chosen) {
+        EXPECT_EQ(some->confusion(i, j), all->confusion(i, j)) << i << "," << j;
+      } else {
+        EXPECT_EQ(some->confusion(i, j), kSkippedPair) << i << "," << j;
+        ASSERT_NE(some->Find(i, j), nullptr);
+        EXPECT_TRUE(some->Find(i, j)->matches.empty());
+      }
+    }
+  EXPECT_GT(some->confusion(0, 1), 0) << "neighbouring stations share features";
+  const auto bad = MatchPairs(features, {{0, n}}, MatchOptions(), progress, go);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(bad.error().message.find("not a pair"), std::string::npos) << bad.error().message;
+}
+
 }  // namespace
 }  // namespace scanreg

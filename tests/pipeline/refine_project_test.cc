@@ -208,6 +208,7 @@ TEST(RegisterScans, StanfordBunnyFromIdentityByGeometryAlone) {
   for (const io::LinkRecord& l : r->links) {
     if (l.status == io::LinkStatus::kFailed) continue;
     EXPECT_EQ(l.matches, 0) << "no reflectance: no SIFT matches expected";
+    if (l.method.rfind("none+", 0) == 0) continue;  // refined from the registered poses for the global step
     EXPECT_GT(l.geometric_inliers, 0) << l.parent << " -> " << l.child;
   }
   // Every registered scan is right; an unregistered one counts against the floor below.
