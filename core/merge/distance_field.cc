@@ -187,14 +187,15 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
 }
 
 Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
-                                  const CancelToken& cancel) {
+                                  const CancelToken& cancel, const SparseGrid::Bounds* bounds) {
   if (Status s = options.Validate(); !s) return s.error();
   const double band = options.Band();
   const bool ml = options.method == MergeMethod::kMaximumLikelihood;
   patches.BuildHash(CandidateRadius(options));
   SparseGrid grid(patches.origin, options.voxel_m);
+  if (bounds) grid.Restrict(*bounds);
   progress.Report(0.0, "allocating blocks");
-  {  // counted first: the blocks are allocated once, without a reallocation's double peak
+  if (!bounds) {  // counted first: the blocks are allocated once, without a reallocation's double peak
     BlockCounter counter(options.voxel_m, band, patches.points.size() * 27 + 1);
     for (const Eigen::Vector3f& p : patches.points) counter.Add(p);
     grid.Reserve(counter.count());

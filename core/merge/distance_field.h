@@ -20,9 +20,11 @@ namespace scanreg::merge {
 Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                   const CancelToken& cancel);
 
-// The same from prepared patches (RangePatches::BuildHash is called here).
+// The same from prepared patches (RangePatches::BuildHash is called here); with `bounds`, only the
+// blocks within them (a tile of a tiled merge: the patches must hold every one within
+// CandidateRadius of those blocks, and the result there is the untiled one's).
 Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
-                                  const CancelToken& cancel);
+                                  const CancelToken& cancel, const SparseGrid::Bounds* bounds = nullptr);
 
 // Radius within which a grid point's field depends on the patches: the band, plus 3 sigma for ML.
 double CandidateRadius(const MergeOptions& options);

@@ -13,26 +13,23 @@ constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}, {0, 1
 constexpr int kEdgeCorners[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
                                      {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
-struct EdgeKey {
-  int i, j, k, axis;  // the edge from grid point (i, j, k) one step along axis
-  bool operator==(const EdgeKey& o) const { return i == o.i && j == o.j && k == o.k && axis == o.axis; }
-};
-struct EdgeKeyHash {
-  std::size_t operator()(const EdgeKey& e) const {
-    return BlockKeyHash()(BlockKey{e.i, e.j, e.k}) * 4 + std::size_t(e.axis);
-  }
-};
-
 }  // namespace
 
 Mesh ExtractMesh(const SparseGrid& grid) {
+  MeshBuilder builder;
+  builder.Add(grid);
+  return std::move(builder.mesh());
+}
+
+void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
   constexpr int B = SparseGrid::kBlock;
-  Mesh mesh;
+  Mesh& mesh = mesh_;
+  auto& vertex_of = vertex_of_;
   mesh.origin = grid.origin();
-  std::unordered_map<EdgeKey, int, EdgeKeyHash> vertex_of;
   const float h = float(grid.voxel());
   for (std::size_t bi = 0; bi < grid.num_blocks(); ++bi) {
     const SparseGrid::Block& b = grid.block(bi);
+    if (own && !own->Contains(b.key)) continue;
     for (int z = 0; z < B; ++z) {
       for (int y = 0; y < B; ++y) {
         for (int x = 0; x < B; ++x) {
@@ -84,7 +81,6 @@ Mesh ExtractMesh(const SparseGrid& grid) {
       }
     }
   }
-  return mesh;
 }
 
 }  // namespace scanreg::merge

@@ -3,11 +3,36 @@
 // gives a watertight mesh. Cubes with an unknown corner produce nothing.
 #pragma once
 
+#include <unordered_map>
+
 #include "core/merge/mesh.h"
 #include "core/merge/sparse_grid.h"
 
 namespace scanreg::merge {
 
 Mesh ExtractMesh(const SparseGrid& grid);
+
+// The same piece by piece (a tiled merge): each Add meshes the cubes whose lowest grid point lies in
+// `own` (all when null), and a vertex on a grid edge that an earlier piece already holds is shared,
+// so that the pieces join without duplicate vertices or cracks. Every piece's grid has the same
+// origin and voxel, and its values at the grid points that cubes in `own` touch are final.
+class MeshBuilder {
+ public:
+  void Add(const SparseGrid& grid, const SparseGrid::Bounds* own = nullptr);
+  Mesh& mesh() { return mesh_; }
+
+ private:
+  struct EdgeKey {
+    int i, j, k, axis;  // the edge from grid point (i, j, k) one step along axis
+    bool operator==(const EdgeKey& o) const { return i == o.i && j == o.j && k == o.k && axis == o.axis; }
+  };
+  struct EdgeKeyHash {
+    std::size_t operator()(const EdgeKey& e) const {
+      return BlockKeyHash()(BlockKey{e.i, e.j, e.k}) * 4 + std::size_t(e.axis);
+    }
+  };
+  Mesh mesh_;
+  std::unordered_map<EdgeKey, int, EdgeKeyHash> vertex_of_;
+};
 
 }  // namespace scanreg::merge

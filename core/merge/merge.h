@@ -16,7 +16,9 @@ namespace scanreg::merge {
 struct MergeResult {
   Mesh mesh;
   std::size_t scans = 0;             // scans merged
-  std::size_t input_points = 0;      // their valid points
+  // Tiled (MergeOptions::tile_blocks): points and patches summed over the tiles, each tile's margin
+  // counted in it; blocks and known voxels of each tile's own blocks; field_bytes the largest tile's.
+  std::size_t input_points = 0;      // their valid points (thinned where denser than the grid)
   std::size_t patches = 0;           // range-image triangles used
   std::size_t blocks = 0;            // allocated 8^3 blocks
   std::size_t known_voxels = 0;      // grid points with a field value

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <thread>
+#include <unordered_map>
 
 #include "core/merge/sparse_grid.h"
 
@@ -25,9 +26,12 @@ constexpr double kBytesPerCellCopy = 17.0;  // a scan's copy with the left-out p
 struct Count {
   std::size_t points = 0, cells = 0, blocks = 0;
   bool capped = false;
+  double tile_share = 1.0;  // the largest tile's share of the blocks (a tiled merge's field at once)
 };
 
-Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel, std::size_t cap) {
+// Blocks counted at `voxel` for a merge at merge_voxel (equal, or finer when extrapolating).
+Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel, std::size_t cap,
+                  double merge_voxel) {
   Count c;
   if (scans.empty()) return c;
   const Eigen::Vector3d origin = scans.front()->world_from_scan.translation();
@@ -43,13 +47,27 @@ Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& opt
     }
   }
   c.blocks = counter.count();
+  // Tiles of options.tile_blocks blocks at the merge's voxel, with their margins (merge.cc: two
+  // blocks each side): the most blocks one tile's field holds.
+  if (options.tile_blocks > 0 && c.blocks > 0) {
+    const double tile_m = options.tile_blocks * SparseGrid::kBlock * merge_voxel;
+    const double block_m = SparseGrid::kBlock * voxel;
+    std::unordered_map<BlockKey, std::size_t, BlockKeyHash> per_tile;
+    std::size_t most = 0;
+    for (const BlockKey& k : counter.keys()) {
+      const BlockKey tile{int(std::floor(k.x * block_m / tile_m)), int(std::floor(k.y * block_m / tile_m)), 0};
+      most = std::max(most, ++per_tile[tile]);
+    }
+    const double margin = std::pow((options.tile_blocks + 4.0) / options.tile_blocks, 2);
+    c.tile_share = std::min(1.0, margin * double(most) / double(c.blocks));
+  }
   return c;
 }
 
 MergeEstimate Estimate(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel,
                        std::size_t cap) {
   MergeEstimate e;
-  Count c = CountBlocks(scans, options, voxel, cap);
+  Count c = CountBlocks(scans, options, voxel, cap, voxel);
   e.points = c.points;
   e.blocks = c.blocks;
   // Past the cap: count at coarser voxels until the count fits, once more at twice that voxel, and
@@ -58,18 +76,19 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const MergeOptions
   double coarse = voxel;
   while (c.capped && coarse < 1e4) {
     coarse *= 2.0;
-    c = CountBlocks(scans, options, coarse, cap);
+    c = CountBlocks(scans, options, coarse, cap, voxel);
     e.extrapolated = true;
   }
   if (e.extrapolated) {
-    const Count coarser = CountBlocks(scans, options, 2.0 * coarse, cap);
+    const Count coarser = CountBlocks(scans, options, 2.0 * coarse, cap, voxel);
     const double k = coarser.blocks > 0 ? std::clamp(std::log2(double(c.blocks) / double(coarser.blocks)), 1.0, 3.0) : 2.0;
     e.blocks = static_cast<std::size_t>(std::min(1e18, double(c.blocks) * std::pow(coarse / voxel, k)));
   }
   const double blocks = double(e.blocks);
-  const double patch_points = std::min(double(e.points), kPatchPointsPerBlock * blocks);
+  const double field_blocks = c.tile_share * blocks;  // at once: one tile's
+  const double patch_points = std::min(double(e.points), kPatchPointsPerBlock * field_blocks);
   const bool copies = options.remove_moving || options.max_range_m > 0.0;
-  const double bytes = blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
+  const double bytes = field_blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
                        blocks * kMeshBytesPerBlock + (copies ? double(c.cells) * kBytesPerCellCopy : 0.0);
   e.bytes = static_cast<std::size_t>(std::min(bytes, 1e18));
   const double threads = std::max(1u, std::thread::hardware_concurrency());

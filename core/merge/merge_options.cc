@@ -16,6 +16,7 @@ Status MergeOptions::Validate() const {
     return bad("merge: range noise sigma must be > 0 metres, got " + std::to_string(sigma_m));
   }
   if (!(band_m >= 0.0) || !std::isfinite(band_m)) return bad("merge: band must be >= 0 metres");
+  if (tile_blocks < 0) return bad("merge: tile size must be >= 0 blocks (0: one piece)");
   if (!(max_range_m >= 0.0) || !std::isfinite(max_range_m)) {
     return bad("merge: maximum range must be >= 0 metres (0 = no limit)");
   }

@@ -29,6 +29,9 @@ struct MergeOptions {
   int smooth_iterations = 0;       // passes of a 3x3x3 mean filter over the field (S §3.3, optional)
   bool remove_small_pieces = true;  // drop connected pieces of the mesh with few triangles
   double min_piece_fraction = 0.05;  // a piece is small below this fraction of the largest piece's triangles
+  // The field is built and meshed in tiles of this many 8^3-voxel blocks across (x and y; 256 voxels:
+  // 5 m at 2 cm), so its memory is one tile's, whatever the project's size (0: one piece).
+  int tile_blocks = 32;
   double max_grazing_deg = 85.0;   // degrees: range-image triangles seen more obliquely are not patches
   // metres: returns farther from their scanner are left out (0 = all). Far returns are sparse and
   // noisy, and they spread the field over a large area (the street's ground to 200 m).

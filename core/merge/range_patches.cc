@@ -21,6 +21,31 @@ double MedianSpacing(const Scan& scan) {
   return d[d.size() / 2];
 }
 
+// A scan's pose relative to the patches' origin.
+Eigen::Isometry3f Shifted(const Scan& s, const Eigen::Vector3d& origin) {
+  Eigen::Isometry3d shifted = s.world_from_scan;
+  shifted.translation() -= origin;
+  return shifted.cast<float>();
+}
+
+// The scan's range image for Curless–Levoy projection (empty without an angular grid).
+RangeView MakeView(const Scan& s, const Eigen::Isometry3f& t) {
+  RangeView view;
+  if (s.angles.empty() || int(s.angles.azimuth.size()) != s.cols || int(s.angles.elevation.size()) != s.rows) return view;
+  view.scan_from_world = t.linear().transpose();
+  view.eye = t.translation();
+  view.angles = s.angles;
+  view.rows = s.rows, view.cols = s.cols;
+  auto range = std::make_shared<std::vector<float>>(s.size(), -1.0f);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (s.valid[i]) (*range)[i] = s.points[i].norm();
+  view.range = std::move(range);
+  return view;
+}
+
+// Rows and columns kept of a range image much denser than the grid (every s-th).
+int Stride(double spacing, double voxel_m) { return spacing > 0 ? std::clamp(int(0.5 * voxel_m / spacing), 1, 8) : 1; }
+
 // Index i0 and fraction t with v between a[i0] and a[i0 + 1] (a monotonic, either direction);
 // within half a step beyond the ends counts as the end cell.
 bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
@@ -56,6 +81,7 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
   float tc, tr;
   if (!Locate(angles.azimuth, std::atan2(q.y(), q.x()), &c0, &tc)) return false;
   if (!Locate(angles.elevation, std::atan2(q.z(), std::hypot(q.x(), q.y())), &r0, &tr)) return false;
+  const std::vector<float>& range = *this->range;
   const float v00 = range[r0 * cols + c0], v01 = range[r0 * cols + c0 + 1];
   const float v10 = range[(r0 + 1) * cols + c0], v11 = range[(r0 + 1) * cols + c0 + 1];
   *voxel_range = r;
@@ -68,6 +94,50 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
   if (nearest <= 0.0f) return false;
   *surface_range = nearest;
   return true;
+}
+
+TileInputs PrepareTileInputs(const std::vector<const Scan*>& scans) {
+  constexpr int kB = TileInputs::kCellBlock, kReach = 8;  // the largest stride
+  const Eigen::Vector3d origin = PatchOrigin(scans);
+  TileInputs out;
+  out.views.resize(scans.size());
+  out.blocks.resize(scans.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long si = 0; si < long(scans.size()); ++si) {
+    const Scan& s = *scans[si];
+    const Eigen::Isometry3f t = Shifted(s, origin);
+    out.views[si] = MakeView(s, t);
+    const int block_rows = (s.rows + kB - 1) / kB, block_cols = (s.cols + kB - 1) / kB;
+    std::vector<Eigen::AlignedBox3f>& boxes = out.blocks[si];
+    boxes.assign(std::size_t(block_rows) * block_cols, Eigen::AlignedBox3f());  // empty boxes
+    for (int r = 0; r < s.rows; ++r) {
+      for (int c = 0; c < s.cols; ++c) {
+        const std::size_t i = s.Index(r, c);
+        if (!s.valid[i]) continue;
+        const Eigen::Vector3f p = t * s.points[i];
+        // The cell belongs to its own block and, within kReach, to the blocks before it.
+        for (int br = std::max(0, (r - kReach) / kB); br <= r / kB; ++br)
+          for (int bc = std::max(0, (c - kReach) / kB); bc <= c / kB; ++bc) boxes[std::size_t(br) * block_cols + bc].extend(p);
+      }
+    }
+  }
+  return out;
+}
+
+Eigen::Vector3d PatchOrigin(const std::vector<const Scan*>& scans) {
+  // The first scanner position, rounded to a metre (keeps UTM offsets out of the floats).
+  for (const Scan* s : scans)
+    if (s->CountValid()) return s->world_from_scan.translation().array().round();
+  return Eigen::Vector3d::Zero();
+}
+
+double MaxPatchEdge(const std::vector<const Scan*>& scans, double voxel_m) {
+  double edge = 0.0;
+  for (const Scan* s : scans) {
+    const double spacing = MedianSpacing(*s);
+    edge = std::max(edge, 8.0 * spacing * Stride(spacing, voxel_m));
+  }
+  return edge;
 }
 
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
@@ -92,10 +162,10 @@ Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Ve
 }
 
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel, double voxel_m) {
+                                         const CancelToken& cancel, double voxel_m, const Eigen::AlignedBox3f* keep,
+                                         const TileInputs* tiles) {
   RangePatches out;
-  // Origin: the first scanner position, rounded to a metre (keeps UTM offsets out of the floats).
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d origin = PatchOrigin(scans);
   std::size_t total = 0;
   for (const Scan* s : scans) total += s->CountValid();
   if (total == 0) {
@@ -105,42 +175,39 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
                      scans.empty() ? "merge: no scan to merge (mark scans registered first)"
                                    : "merge: the scans to merge (" + names + ") have no valid point");
   }
-  for (const Scan* s : scans) {
-    if (s->CountValid()) {
-      origin = s->world_from_scan.translation().array().round();
-      break;
-    }
-  }
   out.origin = origin;
-  out.points.reserve(total);
+  if (!keep) out.points.reserve(total);
   const float cos_grazing = float(std::cos(max_grazing_deg * M_PI / 180.0));
   for (std::size_t si = 0; si < scans.size(); ++si) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled while meshing the scans");
     const Scan& s = *scans[si];
-    Eigen::Isometry3d shifted = s.world_from_scan;
-    shifted.translation() -= origin;
-    const Eigen::Isometry3f t = shifted.cast<float>();
+    const Eigen::Isometry3f t = Shifted(s, origin);
     const Eigen::Vector3f eye = t.translation();
     out.scanner.push_back(eye);
-    RangeView& view = out.views.emplace_back();
-    if (!s.angles.empty() && int(s.angles.azimuth.size()) == s.cols && int(s.angles.elevation.size()) == s.rows) {
-      view.scan_from_world = t.linear().transpose();
-      view.eye = eye;
-      view.angles = s.angles;
-      view.rows = s.rows, view.cols = s.cols;
-      view.range.assign(s.size(), -1.0f);
-      for (std::size_t i = 0; i < s.size(); ++i) {
-        if (s.valid[i]) view.range[i] = s.points[i].norm();
-      }
-    }
+    out.views.push_back(tiles ? tiles->views[si] : MakeView(s, t));
     const double spacing = MedianSpacing(s);
-    const int stride = spacing > 0 ? std::clamp(int(0.5 * voxel_m / spacing), 1, 8) : 1;
+    const int stride = Stride(spacing, voxel_m);
     const float max_edge2 = float(std::pow(8.0 * spacing * stride, 2));
+    // The cell blocks that may reach `keep` (all without a tile); cells are visited in row-major
+    // order either way, so a tile's points and patches keep the whole merge's order.
+    constexpr int kB = TileInputs::kCellBlock;
+    const int block_cols = (s.cols + kB - 1) / kB;
+    std::vector<char> needed;
+    if (keep && tiles) {
+      for (const Eigen::AlignedBox3f& b : tiles->blocks[si]) needed.push_back(!b.isEmpty() && b.intersects(*keep));
+    }
+    auto visit = [&](int r, int c) { return needed.empty() || needed[(r / kB) * block_cols + c / kB]; };
     std::vector<int> id(s.size(), -1);
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      if (!s.valid[i] || (int(i / s.cols) % stride) || (int(i % s.cols) % stride)) continue;
-      id[i] = int(out.points.size());
-      out.points.push_back(t * s.points[i]);
+    for (int r = 0; r < s.rows; r += stride) {
+      for (int c = 0; c < s.cols; c += stride) {
+        if (!visit(r, c)) continue;
+        const std::size_t i = s.Index(r, c);
+        if (!s.valid[i]) continue;
+        const Eigen::Vector3f p = t * s.points[i];
+        if (keep && !keep->contains(p)) continue;
+        id[i] = int(out.points.size());
+        out.points.push_back(p);
+      }
     }
     auto add = [&](int a, int b, int c) {
       if (a < 0 || b < 0 || c < 0) return;
@@ -164,6 +231,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
     };
     for (int r = 0; r + stride < s.rows; r += stride) {
       for (int c = 0; c + stride < s.cols; c += stride) {
+        if (!visit(r, c)) continue;
         const int p00 = id[s.Index(r, c)], p01 = id[s.Index(r, c + stride)];
         const int p10 = id[s.Index(r + stride, c)], p11 = id[s.Index(r + stride, c + stride)];
         if (p00 >= 0 && p01 >= 0 && p10 >= 0 && p11 >= 0) {
@@ -179,7 +247,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
       }
     }
   }
-  if (out.patches.empty()) {
+  if (out.patches.empty() && !keep) {  // a tile of a tiled merge may hold nothing
     return MakeError(ErrorCode::kFailed, "merge: the scans' valid points form no surface (no adjacent valid cells)");
   }
   return out;

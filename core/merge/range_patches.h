@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -26,7 +27,7 @@ struct RangeView {
   Eigen::Matrix3f scan_from_world = Eigen::Matrix3f::Identity();  // rotation
   Eigen::Vector3f eye = Eigen::Vector3f::Zero();                  // scanner, world minus origin
   AngularGrid angles;
-  std::vector<float> range;  // rows*cols, metres; < 0 where the cell is empty
+  std::shared_ptr<const std::vector<float>> range;  // rows*cols, metres; < 0 where the cell is empty
   int rows = 0, cols = 0;
   bool empty() const { return angles.empty(); }
   // Range of the scan's surface along the line of sight through x (bilinear over the 2x2 cells
@@ -66,8 +67,27 @@ struct RangePatches {
 // Errors name the scan when no scan has a valid point.
 // Range images much denser than the grid are thinned first: every s-th row and column with
 // s = clamp(floor(0.5 voxel / median spacing), 1, 8) (0 voxel: no thinning).
+// What the tiles of a tiled merge share, prepared once: each scan's range view, and the bounding box
+// (relative to PatchOrigin) of each 16 x 16-cell block's valid points together with the 8 rows and
+// columns after it (the farthest a triangle of the block reaches), so a tile visits only the blocks
+// that may reach it.
+struct TileInputs {
+  static constexpr int kCellBlock = 16;
+  std::vector<RangeView> views;
+  std::vector<std::vector<Eigen::AlignedBox3f>> blocks;  // per scan, row-major over cell blocks
+};
+TileInputs PrepareTileInputs(const std::vector<const Scan*>& scans);
+
+// `keep` (relative to the origin, which depends on the scans only): points outside it are left out,
+// with the triangles they belong to (a tile of a tiled merge; `tiles` from PrepareTileInputs).
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel, double voxel_m = 0.0);
+                                         const CancelToken& cancel, double voxel_m = 0.0,
+                                         const Eigen::AlignedBox3f* keep = nullptr, const TileInputs* tiles = nullptr);
+
+// The origin BuildRangePatches uses for these scans (the first scanner with a valid point, rounded).
+Eigen::Vector3d PatchOrigin(const std::vector<const Scan*>& scans);
+// The longest triangle edge BuildRangePatches may make for these scans at this voxel.
+double MaxPatchEdge(const std::vector<const Scan*>& scans, double voxel_m);
 
 // Nearest point to x on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& x, const Eigen::Vector3f& a, const Eigen::Vector3f& b,

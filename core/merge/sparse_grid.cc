@@ -23,7 +23,7 @@ void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m) {
     for (int y = lo[1]; y <= hi[1]; ++y) {
       for (int x = lo[0]; x <= hi[0]; ++x) {
         const BlockKey key{x, y, z};
-        if (index_.count(key)) continue;
+        if ((bounded_ && !bounds_.Contains(key)) || index_.count(key)) continue;
         index_.emplace(key, blocks_.size());
         Block& b = blocks_.emplace_back();
         b.key = key;

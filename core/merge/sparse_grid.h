@@ -38,8 +38,17 @@ class SparseGrid {
   const Eigen::Vector3d& origin() const { return origin_; }
   double voxel() const { return voxel_; }
 
-  // Allocates (unknown) every block holding a grid point within band_m of p (p relative to origin).
+  // Allocates (unknown) every block holding a grid point within band_m of p (p relative to origin),
+  // within the bounds when set.
   void AllocateAround(const Eigen::Vector3f& p, double band_m);
+  // Blocks lo..hi (inclusive, each axis) only: a tile of a tiled merge (merge.h).
+  struct Bounds {
+    BlockKey lo, hi;
+    bool Contains(const BlockKey& k) const {
+      return k.x >= lo.x && k.x <= hi.x && k.y >= lo.y && k.y <= hi.y && k.z >= lo.z && k.z <= hi.z;
+    }
+  };
+  void Restrict(const Bounds& bounds) { bounds_ = bounds, bounded_ = true; }
   std::size_t num_blocks() const { return blocks_.size(); }
   // Room for this many blocks before AllocateAround adds them (no reallocation peak on the way).
   void Reserve(std::size_t blocks) { blocks_.reserve(blocks), index_.reserve(blocks); }
@@ -62,6 +71,8 @@ class SparseGrid {
   double voxel_;
   std::vector<Block> blocks_;
   std::unordered_map<BlockKey, std::size_t, BlockKeyHash> index_;
+  Bounds bounds_;
+  bool bounded_ = false;
 };
 
 inline int FloorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
@@ -76,6 +87,7 @@ class BlockCounter {
   bool Add(const Eigen::Vector3f& p);
   std::size_t count() const { return keys_.size(); }
   bool capped() const { return keys_.size() >= cap_; }
+  const std::unordered_set<BlockKey, BlockKeyHash>& keys() const { return keys_; }
 
  private:
   double voxel_, band_;
