@@ -11,6 +11,28 @@
 
 namespace scanreg::sim {
 
+// Asphalt and paving without road markings: noise, and (unless plain) patches, stains and cracks.
+inline SurfaceTexture Pavement(std::uint64_t seed, bool plain) {
+  SurfaceTexture t;
+  t.seed = seed;
+  t.base = 0.22f;
+  t.noise_amplitude = plain ? 0.01f : 0.06f;
+  t.noise_wavelength_m = 3.0;
+  t.noise_octaves = 4;
+  if (!plain) {
+    t.blob_contrast = 0.07f;  // patches, stains, manhole covers
+    t.blob_cell_m = 3.0;
+    t.blob_probability = 0.35;
+    t.blob_radius_m = 1.2;
+    t.stroke_contrast = 0.12f;  // cracks, tar seams
+    t.stroke_cell_m = 2.5;
+    t.stroke_probability = 0.4;
+    t.stroke_width_m = 0.03;
+    t.stroke_length_m = 2.2;
+  }
+  return t;
+}
+
 struct Builder {
   Scene& scene;
   Rng& rng;

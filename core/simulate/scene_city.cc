@@ -128,17 +128,7 @@ void AddCity(const SceneOptions& o, Scene& scene, Rng& rng) {
   Builder b{scene, rng, false};
   const double p = Pitch(o), w = o.street_half_width_m, block = o.city_block_m;
   const Vec3 middle(0.5 * o.city_blocks_x * p, 0.5 * o.city_blocks_y * p, 0.0);
-  SurfaceTexture ground = b.Noisy(0.22f, 0.06f, 3.0);
-  ground.noise_octaves = 4;
-  ground.blob_contrast = 0.07f;  // patches, stains, manhole covers
-  ground.blob_cell_m = 3.0;
-  ground.blob_probability = 0.35;
-  ground.blob_radius_m = 1.2;
-  ground.stroke_contrast = 0.12f;  // cracks, tar seams
-  ground.stroke_cell_m = 2.5;
-  ground.stroke_probability = 0.4;
-  ground.stroke_width_m = 0.03;
-  ground.stroke_length_m = 2.2;
+  const SurfaceTexture ground = sim::Pavement(b.Seed(), false);
   scene.AddRectangle(middle, Vec3::UnitX(), Vec3::UnitY(), middle.x() + p + 300.0, middle.y() + p + 300.0,
                      scene.AddTexture(ground));
   // Blocks -1..blocks (a ring outside the streets the stations use); block (i, j) spans

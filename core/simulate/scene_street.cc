@@ -17,23 +17,7 @@ using sim::Builder;
 using Vec3 = Eigen::Vector3d;
 
 SurfaceTexture GroundTexture(const SceneOptions& o, Rng& rng, bool repeated) {
-  SurfaceTexture t;
-  t.seed = rng.Next();
-  t.base = 0.22f;
-  t.noise_amplitude = repeated ? 0.01f : 0.06f;
-  t.noise_wavelength_m = 3.0;
-  t.noise_octaves = 4;
-  if (!repeated) {
-    t.blob_contrast = 0.07f;  // patches, stains, manhole covers
-    t.blob_cell_m = 3.0;
-    t.blob_probability = 0.35;
-    t.blob_radius_m = 1.2;
-    t.stroke_contrast = 0.12f;  // cracks, tar seams
-    t.stroke_cell_m = 2.5;
-    t.stroke_probability = 0.4;
-    t.stroke_width_m = 0.03;
-    t.stroke_length_m = 2.2;
-  }
+  SurfaceTexture t = sim::Pavement(rng.Next(), repeated);
   t.ground.enabled = true;
   t.ground.road_half_width = o.street_half_width_m - 3.5;
   t.ground.sidewalk_outer = o.street_half_width_m + 0.3;
