@@ -236,7 +236,10 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"levelled", true, false,
         "DEG      the scans are levelled (tilt compensator) to this accuracy, a constraint of the "
         "georeferencing; a scan whose file carried a pose is levelled through that pose's vertical "
-        "(default 0: not levelled)"}},
+        "(default 0: not levelled)"},
+       {"candidates", true, false,
+        "K        match each scan's features with its K best-voted scans, its capture-order neighbour "
+        "and the user's pairs only (default 10; 0: every pair)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {

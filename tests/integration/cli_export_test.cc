@@ -9,6 +9,7 @@
 #include "core/io/pose_file.h"
 #include "core/io/project.h"
 #include "core/io/scan_file.h"
+#include "core/pipeline/register_settings.h"
 #include "tests/integration/cli_run.h"
 #include "tests/support/test_paths.h"
 
@@ -233,6 +234,18 @@ TEST(CliExport, ManPageListsEveryCommandAndOption) {
     }
   }
   EXPECT_GE(count, 10) << help.output;
+}
+
+// Every registration setting (the GUI's Settings dialog) can be given to `register` as its flag.
+TEST(CliExport, RegisterTakesEverySettingAsAFlag) {
+  RunResult help = RunCli("register --help");
+  ASSERT_EQ(help.status, 0);
+  int count = 0;
+  for (const pipeline::RegisterSetting& s : pipeline::RegisterSettings()) {
+    ++count;
+    EXPECT_NE(help.output.find("--" + std::string(s.flag) + " "), std::string::npos) << "register lacks --" << s.flag;
+  }
+  EXPECT_GE(count, 12);
 }
 
 }  // namespace
