@@ -177,8 +177,15 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
       if (parent < 0 || choices.kept.count({parent, child})) return partners;  // the user's link: never failed by a check
       const bool needs_loop = done.at({parent, child}).needs_loop;
       if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) return partners;
+      // A loop that confirms a link leaves the child's subtree: a scan placed through the child
+      // closes a loop of the subtree's own links, whatever the link to the parent is.
+      auto below_child = [&](int q) {
+        for (int a = q; a >= 0; a = order.parent[a])
+          if (a == child) return true;
+        return false;
+      };
       for (int q : order.order) {
-        if (q == child || q == parent || order.parent[q] == child) continue;
+        if (q == child || q == parent || order.parent[q] == child || (needs_loop && below_child(q))) continue;
         if (Contains(excluded, q, child)) continue;
         const int w = std::max(weights(q, child), weights(child, q));
         if (w >= source.min_check_weight) partners.emplace_back(-w, q);
@@ -215,6 +222,9 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         if (!use_reverse) checked_with[child] = best;
         const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
         if (gap.position_m <= options.loop_tolerance_m && gap.angle_rad <= options.loop_tolerance_rad) {
+          // A check that itself needs a loop does not confirm one: two plan-view poses from
+          // neighbouring scans agree on the same wrong street as readily as on the right one.
+          if (needs_loop && check.needs_loop) continue;
           closed = true;
           break;
         }

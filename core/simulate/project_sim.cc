@@ -21,11 +21,14 @@ bool IsCity(const SimulatedProjectOptions& o) { return o.scene.kind == SceneOpti
 // spacing of an earlier one (crossings are scanned once), at most o.stations of them.
 std::vector<Eigen::Vector3d> CityStations(const SimulatedProjectOptions& o, const SceneOptions& city, sim::Rng& rng) {
   const double lateral = std::min(1.5, 0.2 * o.spacing_m);
+  // Each block's length is split evenly at no more than the spacing, so a station stands at every
+  // crossing (where the surveyor sees along both streets).
+  const double pitch = CityPitch(city), step = pitch / std::ceil(pitch / o.spacing_m - 1e-9);
   std::vector<Eigen::Vector3d> out;
   for (const StreetLeg& leg : CityStreets(city)) {
     const Eigen::Vector3d a = (leg.to - leg.from).normalized(), left = Eigen::Vector3d::UnitZ().cross(a);
     const double length = (leg.to - leg.from).norm();
-    for (double u = 0.0; u <= length + 1e-9 && static_cast<int>(out.size()) < o.stations; u += o.spacing_m) {
+    for (double u = 0.0; u <= length + 1e-6 && static_cast<int>(out.size()) < o.stations; u += step) {
       const Eigen::Vector3d at = leg.from + u * a;
       bool near = false;
       for (const Eigen::Vector3d& q : out) near |= (q - at).head<2>().norm() < 0.5 * o.spacing_m;

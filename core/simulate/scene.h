@@ -123,9 +123,11 @@ struct SceneOptions {
 struct StreetLeg {
   Eigen::Vector3d from, to;
 };
-// kCity: every street the stations may use, in the order a surveyor walks them (the streets along x,
-// alternating direction, then those along y).
+// kCity: every street the stations may use, in the order a surveyor walks them: the ring round the
+// grid (a closed loop), then the inner streets along x, then along y.
 std::vector<StreetLeg> CityStreets(const SceneOptions& options);
+// kCity: the distance between two crossings along a street.
+double CityPitch(const SceneOptions& options);
 
 // Centre (on the ground) of the far site: > 1 km from the street, beyond any scanner's range.
 Eigen::Vector3d FarSiteCenter();

@@ -11,13 +11,14 @@
 #include "core/simulate/scene_builder.h"
 
 namespace scanreg {
+
+double CityPitch(const SceneOptions& o) { return o.city_block_m + 2.0 * o.street_half_width_m; }
+
 namespace {
 
 using sim::Builder;
 using sim::Rng;
 using Vec3 = Eigen::Vector3d;
-
-double Pitch(const SceneOptions& o) { return o.city_block_m + 2.0 * o.street_half_width_m; }
 
 // Half extents of an axis-aligned box from its size along a horizontal axis `a`, across it, and up.
 Vec3 Half(const Vec3& a, double along, double across, double up) {
@@ -111,22 +112,27 @@ void Furniture(Builder& b, const SceneOptions& o, const Vec3& origin, const Vec3
 }  // namespace
 
 std::vector<StreetLeg> CityStreets(const SceneOptions& o) {
-  const double p = Pitch(o);
-  std::vector<StreetLeg> legs;
-  for (int k = 0; k <= o.city_blocks_y; ++k) {  // along x, alternating direction as a surveyor walks
-    const Vec3 a(0, k * p, 0), b(o.city_blocks_x * p, k * p, 0);
-    legs.push_back(k % 2 == 0 ? StreetLeg{a, b} : StreetLeg{b, a});
+  const double p = CityPitch(o), x = o.city_blocks_x * p, y = o.city_blocks_y * p;
+  // First the ring round the whole grid, a closed loop; then the inner streets, along x alternating
+  // direction, then along y.
+  std::vector<StreetLeg> legs = {{Vec3(0, 0, 0), Vec3(x, 0, 0)},
+                                 {Vec3(x, 0, 0), Vec3(x, y, 0)},
+                                 {Vec3(x, y, 0), Vec3(0, y, 0)},
+                                 {Vec3(0, y, 0), Vec3(0, 0, 0)}};
+  for (int k = 1; k < o.city_blocks_y; ++k) {
+    const Vec3 a(0, k * p, 0), b(x, k * p, 0);
+    legs.push_back(k % 2 == 1 ? StreetLeg{b, a} : StreetLeg{a, b});
   }
-  for (int k = o.city_blocks_x; k >= 0; --k) {  // then along y
-    const Vec3 a(k * p, 0, 0), b(k * p, o.city_blocks_y * p, 0);
-    legs.push_back((o.city_blocks_x - k) % 2 == 0 ? StreetLeg{b, a} : StreetLeg{a, b});
+  for (int k = 1; k < o.city_blocks_x; ++k) {
+    const Vec3 a(k * p, 0, 0), b(k * p, y, 0);
+    legs.push_back(k % 2 == 1 ? StreetLeg{a, b} : StreetLeg{b, a});
   }
   return legs;
 }
 
 void AddCity(const SceneOptions& o, Scene& scene, Rng& rng) {
   Builder b{scene, rng, false};
-  const double p = Pitch(o), w = o.street_half_width_m, block = o.city_block_m;
+  const double p = CityPitch(o), w = o.street_half_width_m, block = o.city_block_m;
   const Vec3 middle(0.5 * o.city_blocks_x * p, 0.5 * o.city_blocks_y * p, 0.0);
   const SurfaceTexture ground = sim::Pavement(b.Seed(), false);
   scene.AddRectangle(middle, Vec3::UnitX(), Vec3::UnitY(), middle.x() + p + 300.0, middle.y() + p + 300.0,

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "core/geometry/transform.h"
@@ -34,11 +35,23 @@ struct ScriptedProject {
     }
   }
 
+  // Plan-view poses without feature support (a parallel street): the child placed at wrong[child]
+  // when registered to any parent in weak_parents, weak and needing a loop.
+  std::map<int, Eigen::Isometry3d> wrong;
+  std::set<int> weak_parents;
+
   PairResult Register(int parent, int child) {
     tried.emplace(parent, child);
     PairResult r;
     r.link.parent = scans[parent].name;
     r.link.child = scans[child].name;
+    if (wrong.count(child) && weak_parents.count(parent)) {
+      r.link.status = io::LinkStatus::kWeak;
+      r.link.reason = "plan-view pose without feature support; a loop confirms it";
+      r.link.parent_from_child = truth[parent].inverse() * wrong.at(child);
+      r.needs_loop = true;
+      return r;
+    }
     const double distance = (truth[parent].translation() - truth[child].translation()).norm();
     if (distance > reach || unregistrable.count(child) || unregistrable.count(parent)) {
       r.link.status = io::LinkStatus::kFailed;
@@ -139,6 +152,48 @@ TEST(RegistrationDriver, PositionPartnersAreBoundedAndTheirFailuresAreTheReason)
   EXPECT_EQ(attempts, 3);
   EXPECT_NE(r->scans[3].reason.find("failed: no overlap"), std::string::npos) << r->scans[3].reason;
   for (int i : {0, 1, 2, 4, 5, 6}) EXPECT_TRUE(r->scans[i].registered) << p.scans[i].name;
+}
+
+// A link that needs a loop (a plan-view pose) is confirmed only by a loop through itself: not by
+// a loop of the scans placed through it (measured on the simulated city: a street placed on the
+// parallel street 66 m away, "confirmed" by a check between two of its own scans).
+TEST(RegistrationDriver, ALinkThatNeedsALoopIsNotConfirmedByItsOwnSubtree) {
+  ScriptedProject p({0, 10, 20, 30, 40});
+  p.reach = 25.0;
+  Eigen::Isometry3d elsewhere = p.truth[2];
+  elsewhere.translation().y() += 66.0;
+  p.wrong[2] = elsewhere;
+  p.weak_parents = {1};
+  LinkSource source = p.Source({{0, 1}, {2, 3}, {3, 4}, {2, 4}}, 0);
+  source.weights(1, 2) = source.weights(2, 1) = 60;  // the wrong link is the heaviest edge to s2
+  Expected<ProjectRegistration> r = p.Drive(source);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_TRUE(p.tried.count({1, 2}));
+  EXPECT_TRUE(r->scans[1].registered);
+  for (int i = 0; i < 5; ++i) {
+    if (r->scans[i].registered) {
+      EXPECT_LT(p.Error(*r, i), 1e-6) << p.scans[i].name << " registered at the wrong place";
+    }
+  }
+  EXPECT_FALSE(r->scans[2].registered);
+  EXPECT_NE(r->scans[2].reason.find("no loop through another scan confirms it"), std::string::npos)
+      << r->scans[2].reason;
+}
+
+// Two plan-view poses from neighbouring scans agree on the same wrong place as readily as on the
+// right one: a check that itself needs a loop does not confirm one.
+TEST(RegistrationDriver, TwoLinksThatNeedLoopsDoNotConfirmEachOther) {
+  ScriptedProject p({0, 10, 20});
+  Eigen::Isometry3d elsewhere = p.truth[2];
+  elsewhere.translation().y() += 66.0;
+  p.wrong[2] = elsewhere;
+  p.weak_parents = {0, 1};
+  LinkSource source = p.Source({{0, 1}, {1, 2}, {0, 2}}, 0);
+  Expected<ProjectRegistration> r = p.Drive(source);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_TRUE(p.tried.count({0, 2}) || p.tried.count({2, 0})) << "the loop was checked";
+  EXPECT_TRUE(r->scans[1].registered);
+  EXPECT_FALSE(r->scans[2].registered) << "placed 66 m off on two agreeing plan-view poses";
 }
 
 }  // namespace

@@ -54,6 +54,25 @@ TEST(City, StationsWalkTheStreetsAndCloseLoops) {
   EXPECT_GE(loops, 3) << "the streets cross: the campaign comes back to where it was";
 }
 
+TEST(City, TheCampaignWalksARingThroughEveryCrossing) {
+  const SimulatedProjectOptions o = City(28, 10.0);  // one block: 4 sides of 66 m in 7 steps each
+  ASSERT_TRUE(o.Validate().ok()) << o.Validate().error().message;
+  const std::vector<Eigen::Isometry3d> poses = SimulatedStationPoses(o);
+  ASSERT_EQ(poses.size(), 28u);
+  const double pitch = CityPitch(o.scene);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const std::size_t next = (i + 1) % poses.size();  // the last station closes the ring with the first
+    const double d = (poses[next].translation() - poses[i].translation()).head<2>().norm();
+    EXPECT_LT(d, 1.5 * o.spacing_m) << "stations " << i + 1 << " and " << next + 1 << " are not neighbours";
+  }
+  for (const Eigen::Vector2d crossing : {Eigen::Vector2d(0, 0), Eigen::Vector2d(pitch, 0),
+                                         Eigen::Vector2d(pitch, pitch), Eigen::Vector2d(0, pitch)}) {
+    double nearest = INFINITY;
+    for (const Eigen::Isometry3d& p : poses) nearest = std::min(nearest, (p.translation().head<2>() - crossing).norm());
+    EXPECT_LT(nearest, 2.5) << "a station at the crossing (" << crossing.transpose() << ")";
+  }
+}
+
 TEST(City, EveryStreetHasFacadesOnBothSides) {
   SceneOptions o;
   o.kind = SceneOptions::Kind::kCity;
