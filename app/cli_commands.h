@@ -1,11 +1,14 @@
 // scanreg-cli subcommands. Each returns the process exit status; errors go to stderr as one line.
 #pragma once
 
+#include <filesystem>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "core/io/project.h"
+#include "core/pipeline/pair_jobs.h"
 #include "core/pipeline/register_options.h"
-#include <vector>
 
 namespace scanreg::cli {
 
@@ -30,6 +33,15 @@ const std::vector<Command>& Commands();
 
 // Registers the project's scans, saves the project and prints the evidence (text or JSON).
 // Returns 0 when every scan is registered, 3 when some are not, another code on errors.
-int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json);
+// exchange: the pair registrations of pair jobs (register --collect).
+int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json,
+                      const pipeline::PairExchange* exchange = nullptr);
+
+// Pair jobs (cli_pair_jobs.cc, core/pipeline/pair_jobs.h): register --plan DIR writes the plan;
+// register --collect DIR reads the plan's results into *results and sets the plan's lengths.
+int PlanPairJobs(io::Project& project, pipeline::RegisterOptions options, const std::filesystem::path& dir);
+Status CollectPairJobs(const io::Project& project, const std::filesystem::path& dir, pipeline::RegisterOptions* options,
+                       std::map<std::pair<int, int>, pipeline::PairResult>* results);
+int RunPairJob(const std::vector<std::string>& args);
 
 }  // namespace scanreg::cli

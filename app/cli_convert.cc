@@ -48,6 +48,8 @@ const std::vector<Command>& Commands() {
        RunDemo},
       {"simulate", "simulate a TLS project: PTX scans + project with true reference poses", RunSimulate},
       {"register", "register every scan of a project automatically (W pipeline)", RunRegister},
+      {"pair-job", "run one pair job of a registration planned with register --plan (e.g. one task of a Slurm array)",
+       RunPairJob},
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
       {"new", "create a project from PTX / E57 / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},

@@ -11,6 +11,7 @@
 #include "core/geometry/transform.h"
 #include "core/io/project.h"
 #include "core/io/project_lock.h"
+#include "core/pipeline/pair_jobs.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
@@ -83,6 +84,7 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   }
   std::printf("\npairs matched: %d of %d%s\n", r.pairs_matched, r.pairs_possible,
               r.pairs_matched < r.pairs_possible ? " (candidate pairs; the others are - above)" : "");
+  if (r.pairs_from_jobs > 0) std::printf("pair registrations from the pair jobs: %d\n", r.pairs_from_jobs);
   std::printf("time: features %.1f s (%d from cache), matching %.1f s, pairs %.1f s, total %.1f s\n",
               r.seconds_features, r.features_from_cache, r.seconds_matching, r.seconds_pairs, r.seconds_total);
 }
@@ -145,6 +147,7 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
               {"confusion", confusion},
               {"pairs_matched", r.pairs_matched},
               {"pairs_possible", r.pairs_possible},
+              {"pairs_from_jobs", r.pairs_from_jobs},
               {"links", links},
               {"seconds",
                {{"features", r.seconds_features},
@@ -155,7 +158,8 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
 
 }  // namespace
 
-int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json) {
+int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json,
+                      const pipeline::PairExchange* exchange) {
   // One writer at a time: a second register on this project refuses now, not after minutes of work.
   Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register");
   if (!lock) return Fail(lock.error());
@@ -163,7 +167,7 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
   CancelToken cancel;
   auto loaded = pipeline::LoadProjectScans(project, progress, cancel);
   if (!loaded) return Fail(loaded.error());
-  auto result = pipeline::RegisterProjectScans(project, *loaded, options, progress, cancel);
+  auto result = pipeline::RegisterProjectScans(project, *loaded, options, progress, cancel, exchange);
   if (!result) return Fail(result.error());
   if (Status s = io::SaveProject(project, project.file); !s) return Fail(s.error());
   const auto errors = pipeline::ReferenceErrors(*result, *loaded);
@@ -239,7 +243,13 @@ int RunRegister(const std::vector<std::string>& argv) {
         "(default 0: not levelled)"},
        {"candidates", true, false,
         "K        match each scan's features with its K best-voted scans, its capture-order neighbour "
-        "and the user's pairs only (default 10; 0: every pair)"}},
+        "and the user's pairs only (default 10; 0: every pair)"},
+       {"plan", true, false,
+        "DIR      prepare the features and candidate pairs, write DIR/plan.json with one job per pair "
+        "(run each with scanreg-cli pair-job DIR K, e.g. as a Slurm array), and stop"},
+       {"collect", true, false,
+        "DIR      register with the pair registrations of the jobs planned in DIR (the same result as "
+        "without them; a pair with no job result is registered here)"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -303,6 +313,16 @@ int RunRegister(const std::vector<std::string>& argv) {
                      : "re-estimated from the scans' features (--keep-imported keeps them fixed)");
   }
   pipeline::StoreRegisterSettings(*options, &project->settings);
+  if (args->Has("plan") && args->Has("collect"))
+    return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give --plan or --collect, not both"));
+  if (auto dir = args->Get("plan")) return PlanPairJobs(*project, *options, *dir);
+  if (auto dir = args->Get("collect")) {
+    std::map<std::pair<int, int>, pipeline::PairResult> results;
+    if (Status s = CollectPairJobs(*project, *dir, &*options, &results); !s) return Fail(s.error());
+    pipeline::PairExchange exchange;
+    exchange.results = &results;
+    return RegisterAndReport(*project, *options, args->Has("json"), &exchange);
+  }
   return RegisterAndReport(*project, *options, args->Has("json"));
 }
 

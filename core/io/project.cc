@@ -19,6 +19,44 @@ namespace {
 
 using nlohmann::json;
 
+LinkStatus LinkStatusFromName(const std::string& s) {
+  if (s == "ok") return LinkStatus::kOk;
+  if (s == "weak") return LinkStatus::kWeak;
+  return LinkStatus::kFailed;
+}
+
+// {"scans": [names], "matches": [[counts]]}: one row of non-negative integers per named scan.
+Status ConfusionFromJson(const json& j, const std::string& where, Project* project) {
+  const Error bad =
+      MakeError(ErrorCode::kParseError, where +
+                                            ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
+                                            "non-negative integers or null per scan); delete it and register again");
+  if (!j.is_object() || !j.contains("scans") || !j.contains("matches")) return bad;
+  const json& names = j["scans"];
+  const json& rows = j["matches"];
+  if (!names.is_array() || !rows.is_array() || rows.size() != names.size()) return bad;
+  const std::size_t n = names.size();
+  Eigen::MatrixXi c(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!names[i].is_string() || !rows[i].is_array() || rows[i].size() != n) return bad;
+    project->confusion_scans.push_back(names[i].get<std::string>());
+    for (std::size_t k = 0; k < n; ++k) {
+      if (rows[i][k].is_null()) {  // a pair left out of the candidate pairs
+        c(i, k) = kSkippedPair;
+        continue;
+      }
+      if (!rows[i][k].is_number_integer() || rows[i][k].get<long long>() < 0 ||
+          rows[i][k].get<long long>() > (1LL << 31) - 1)
+        return bad;
+      c(i, k) = rows[i][k].get<int>();
+    }
+  }
+  project->confusion = std::move(c);
+  return Status::Ok();
+}
+
+}  // namespace
+
 json PoseToJson(const Eigen::Isometry3d& t) {
   const auto m = RowMajorFromIsometry(t);
   return json(std::vector<double>(m.begin(), m.end()));
@@ -41,12 +79,6 @@ Expected<Eigen::Isometry3d> PoseFromJson(const json& j, const std::string& what)
     return MakeError(ErrorCode::kParseError, what + " is not a rigid transform");
   }
   return IsometryFromRowMajor(m);
-}
-
-LinkStatus LinkStatusFromName(const std::string& s) {
-  if (s == "ok") return LinkStatus::kOk;
-  if (s == "weak") return LinkStatus::kWeak;
-  return LinkStatus::kFailed;
 }
 
 json LinkToJson(const LinkRecord& l) {
@@ -127,38 +159,6 @@ Expected<LinkRecord> LinkFromJson(const json& j, const std::string& where) {
   }
   return l;
 }
-
-// {"scans": [names], "matches": [[counts]]}: one row of non-negative integers per named scan.
-Status ConfusionFromJson(const json& j, const std::string& where, Project* project) {
-  const Error bad =
-      MakeError(ErrorCode::kParseError, where +
-                                            ": 'confusion' must hold 'scans' (names) and 'matches' (one row of "
-                                            "non-negative integers or null per scan); delete it and register again");
-  if (!j.is_object() || !j.contains("scans") || !j.contains("matches")) return bad;
-  const json& names = j["scans"];
-  const json& rows = j["matches"];
-  if (!names.is_array() || !rows.is_array() || rows.size() != names.size()) return bad;
-  const std::size_t n = names.size();
-  Eigen::MatrixXi c(n, n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!names[i].is_string() || !rows[i].is_array() || rows[i].size() != n) return bad;
-    project->confusion_scans.push_back(names[i].get<std::string>());
-    for (std::size_t k = 0; k < n; ++k) {
-      if (rows[i][k].is_null()) {  // a pair left out of the candidate pairs
-        c(i, k) = kSkippedPair;
-        continue;
-      }
-      if (!rows[i][k].is_number_integer() || rows[i][k].get<long long>() < 0 ||
-          rows[i][k].get<long long>() > (1LL << 31) - 1)
-        return bad;
-      c(i, k) = rows[i][k].get<int>();
-    }
-  }
-  project->confusion = std::move(c);
-  return Status::Ok();
-}
-
-}  // namespace
 
 const char* LinkStatusName(LinkStatus status) {
   switch (status) {

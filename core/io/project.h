@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <nlohmann/json_fwd.hpp>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -51,6 +52,14 @@ struct LinkRecord {
   bool user_rejected = false;  // the user rejected the link
   std::vector<PickedPoint> picked;  // the points the user picked (manual alignment); empty otherwise
 };
+
+// A pose as the project file holds it (16 numbers, row-major), and back; errors name `what`.
+nlohmann::json PoseToJson(const Eigen::Isometry3d& pose);
+Expected<Eigen::Isometry3d> PoseFromJson(const nlohmann::json& j, const std::string& what);
+// One link as the project file holds it (also a pair job's result, pair_jobs.h), and back; errors
+// name `where`.
+nlohmann::json LinkToJson(const LinkRecord& link);
+Expected<LinkRecord> LinkFromJson(const nlohmann::json& j, const std::string& where);
 
 struct ProjectScan {
   std::string name;            // unique within the project

@@ -12,14 +12,18 @@ std::filesystem::path ProjectCacheDir(const io::Project& project) {
 }
 
 Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, ProgressSink& progress,
-                                             const CancelToken& cancel) {
+                                             const CancelToken& cancel, std::vector<int> which) {
+  if (which.empty())
+    for (std::size_t i = 0; i < project.scans.size(); ++i) which.push_back(static_cast<int>(i));
   std::map<std::filesystem::path, std::vector<Scan>> files;
   std::vector<Scan> scans;
-  scans.reserve(project.scans.size());
-  for (std::size_t i = 0; i < project.scans.size(); ++i) {
+  scans.reserve(which.size());
+  for (std::size_t k = 0; k < which.size(); ++k) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "loading scans cancelled");
-    const io::ProjectScan& ps = project.scans[i];
-    SubProgress sub(progress, double(i) / project.scans.size(), double(i + 1) / project.scans.size());
+    if (which[k] < 0 || which[k] >= static_cast<int>(project.scans.size()))
+      return MakeError(ErrorCode::kInvalidArgument, "scan number " + std::to_string(which[k]) + " is not in the project");
+    const io::ProjectScan& ps = project.scans[which[k]];
+    SubProgress sub(progress, double(k) / which.size(), double(k + 1) / which.size());
     auto it = files.find(ps.path);
     std::error_code ec;
     if (it == files.end() && !std::filesystem::is_regular_file(ps.path, ec)) {

@@ -19,9 +19,9 @@ std::filesystem::path ProjectCacheDir(const io::Project& project);
 // Reads every scan of the project (each file once, from the binary scan cache when it holds the
 // file's content: io::ReadScanFileCached), names it as in the project and sets its
 // world_from_scan and reference pose from the project. Errors name the scan and its file (a
-// missing file: how to relink it).
+// missing file: how to relink it). which: only these scans (by index, in this order); empty: all.
 Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, ProgressSink& progress,
-                                             const CancelToken& cancel);
+                                             const CancelToken& cancel, std::vector<int> which = {});
 
 // Relinking scans whose files moved (issue 14, item 6).
 // The scans whose file is not where the project says, by name.

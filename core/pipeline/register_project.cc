@@ -16,6 +16,7 @@
 #include "core/geometry/transform.h"
 #include "core/pipeline/candidate_pairs.h"
 #include "core/pipeline/georeference_project.h"
+#include "core/pipeline/pair_jobs.h"
 #include "core/pipeline/refine_pair.h"
 #include "core/pipeline/refine_project.h"
 #include "core/registration/point_index.h"
@@ -129,7 +130,7 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
 
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& raw_options, ProgressSink& progress,
-                                            const CancelToken& cancel) {
+                                            const CancelToken& cancel, const PairExchange* exchange) {
   if (Status s = raw_options.Validate(); !s) return s.error();
   const int n = static_cast<int>(scans.size());
   NullProgress null_progress;
@@ -139,6 +140,9 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + s.name + "' has no valid point; remove it");
     }
   }
+  if (raw_options.from_current_poses && exchange)
+    return MakeError(ErrorCode::kInvalidArgument, "pair jobs register from features; with --coarse none (refining "
+                                                  "the current poses) register in one process");
   if (raw_options.from_current_poses)
     return RegisterFromCurrentPoses(scans, user, raw_options, progress, cancel);
   std::vector<const Scan*> all;
@@ -192,6 +196,11 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
                      options.candidates, required);
   result.pairs_matched = static_cast<int>(pairs.size());
   result.pairs_possible = n * (n - 1) / 2;
+  if (exchange && exchange->planned) {  // register --plan: the jobs register the pairs
+    exchange->planned(options, pairs);
+    result.seconds_total = Since(t_start);
+    return result;
+  }
   if (result.pairs_matched < result.pairs_possible)
     LogInfo("matching " + std::to_string(result.pairs_matched) + " candidate pairs of " +
             std::to_string(result.pairs_possible) + " (" + std::to_string(options.candidates) +
@@ -247,7 +256,15 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
 
   LinkSource source;
   source.weights = weights;
+  std::atomic<int> from_jobs{0};
   source.register_pair = [&](int parent, int child) {
+    if (exchange && exchange->results) {  // register --collect: the job's registration
+      const auto it = exchange->results->find({parent, child});
+      if (it != exchange->results->end()) {
+        ++from_jobs;
+        return it->second;
+      }
+    }
     return RegisterPair(prepared[parent], prepared[child], sift_of(parent, child), geometric_of(parent, child),
                         options, cancel);
   };
@@ -292,6 +309,7 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
   if (Status s = DriveRegistration(scans, *choices, source, options, pair_progress, cancel, &result); !s) {
     return s.error();
   }
+  result.pairs_from_jobs = from_jobs;
   result.seconds_total = Since(t_start);
   progress.Report(1.0, "registration done");
   return result;
@@ -339,7 +357,7 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
 
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
-                                                   const CancelToken& cancel) {
+                                                   const CancelToken& cancel, const PairExchange* exchange) {
   const std::size_t n = project.scans.size();
   // The scans this run may place (options.only_scans; default all); the others keep pose and links.
   std::vector<bool> in_scope(n, options.only_scans.empty());
@@ -371,8 +389,9 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const s
       options.root = project.scans[first].name;
     }
   }
-  Expected<ProjectRegistration> result = RegisterScans(scans, user, options, progress, cancel);
+  Expected<ProjectRegistration> result = RegisterScans(scans, user, options, progress, cancel, exchange);
   if (!result) return result.error();
+  if (exchange && exchange->planned) return result;  // planned only: nothing registered
   // The user's hand placements are decisions (issue 14): kept as placed, and the scans registered
   // through one are placed from it (they rest on it), like scans below an imported pose.
   std::vector<bool> locked = anchor;

@@ -57,6 +57,8 @@ struct ProjectRegistration {
   // The pairs found overlapping at the registered poses and refined from them for the global step
   // (parent, child), whether their features were matched or not.
   std::vector<std::pair<int, int>> pairs_by_overlap;
+  // register --collect (pair_jobs.h): the pair registrations taken from the jobs' results.
+  int pairs_from_jobs = 0;
   double seconds_features = 0, seconds_matching = 0, seconds_pairs = 0, seconds_total = 0;
 };
 
@@ -93,10 +95,12 @@ struct ScanOrderChoices {
 Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scans, const UserChoices& user,
                                                    const std::optional<std::string>& root);
 
-// scans: with their current world_from_scan (the root keeps its own).
+// scans: with their current world_from_scan (the root keeps its own). exchange: pair
+// registrations planned as jobs, or collected from them (pair_jobs.h).
+struct PairExchange;
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& options, ProgressSink& progress,
-                                            const CancelToken& cancel);
+                                            const CancelToken& cancel, const PairExchange* exchange = nullptr);
 
 // Writes the result into the project: poses, registered flags, links and root.
 void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
@@ -105,9 +109,10 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
 // rejected links, and writes the result into the project (not saved). When the project has control
 // points it is then georeferenced (GeoreferenceProject); a georeferencing failure leaves the
 // registration in the root scan's frame and is reported in georef_error, not as an error.
+// With exchange->planned (register --plan) the project is left as it was.
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
-                                                   const CancelToken& cancel);
+                                                   const CancelToken& cancel, const PairExchange* exchange = nullptr);
 
 // options.keep_imported: the project's imported poses are anchors. Each other registered scan is
 // placed from its nearest anchor up the scan order (its pose relative to that anchor as registered);
