@@ -203,9 +203,16 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         first_checks.emplace_back(partners.front().second, child);
     }
     register_ahead(first_checks);
-    for (int child : order.order) {
+    // The links that need a loop are checked first: a wrong one (a plan-view pose on a parallel
+    // street) fails its own check, before the loops of sound links through the scans it misplaced
+    // open and fail those links instead.
+    std::vector<int> check_order;
+    for (int pass = 0; pass < 2; ++pass)
+      for (int child : order.order)
+        if (order.parent[child] >= 0 && done.at({order.parent[child], child}).needs_loop == (pass == 0))
+          check_order.push_back(child);
+    for (int child : check_order) {
       const int parent = order.parent[child];
-      if (parent < 0) continue;
       if (choices.kept.count({parent, child})) continue;  // the user's link: never failed by a check
       const bool needs_loop = done.at({parent, child}).needs_loop;
       if (!check_all && !needs_loop && done.at({parent, child}).link.status == io::LinkStatus::kOk) continue;
@@ -231,13 +238,12 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         char buf[200];
         std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans[parent].name.c_str(),
                       scans[child].name.c_str(), scans[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
-        LogWarning(std::string(buf) + "; both links failed");
+        // Both links are failed — unless only the link checked needs a loop: then it is the suspect,
+        // and the sound check stays (it may place the child once the suspect is gone).
+        const bool only_suspect = needs_loop && !check.needs_loop;
+        LogWarning(std::string(buf) + (only_suspect ? "; the link that needed a loop failed" : "; both links failed"));
         fail_link(parent, child, buf);
-        if (use_reverse) {
-          fail_link(child, best, buf);
-        } else {
-          fail_link(best, child, buf);
-        }
+        if (!only_suspect) fail_link(use_reverse ? child : best, use_reverse ? best : child, buf);
         open = true;
         break;
       }
