@@ -1,14 +1,13 @@
 #include "core/pipeline/pair_jobs.h"
 
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "core/common/atomic_file.h"
 #include "core/common/hash.h"
 #include "core/features/confusion.h"
 #include "core/io/project.h"
+#include "core/io/text_parse.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/scale_defaults.h"
 #include "core/registration/geometric_features.h"
@@ -29,12 +28,10 @@ Status WriteAtomically(const fs::path& file, const std::string& text) {
 }
 
 Expected<json> ReadJson(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) return MakeError(ErrorCode::kNotFound, file.string() + ": cannot be read");
-  std::stringstream text;
-  text << in.rdbuf();
+  Expected<std::string> text = io::ReadWholeFile(file);
+  if (!text) return text.error();
   try {
-    return json::parse(text.str());
+    return json::parse(*text);
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, file.string() + ": not valid JSON (" + e.what() + ")");
   }
