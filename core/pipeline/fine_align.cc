@@ -43,10 +43,12 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
     }
     case FineMethod::kEm:
     case FineMethod::kProjectiveIcp: {
-      const EmOptions em = PipelineEmOptions(options, *child.scan);
-      Expected<EmResult> r = AlignEm(*parent.scan, *child.scan, initial, em, quiet, cancel);
+      const Expected<std::shared_ptr<const Scan>> p = parent.Full(), c = child.Full();
+      if (!p || !c) return (p ? c : p).error();
+      const EmOptions em = PipelineEmOptions(options, **c);
+      Expected<EmResult> r = AlignEm(**p, **c, initial, em, quiet, cancel);
       if (!r)
-        return MakeError(r.error().code, EmMethodName(em) + " of '" + child.scan->name + "' to '" + parent.scan->name +
+        return MakeError(r.error().code, EmMethodName(em) + " of '" + child.name + "' to '" + parent.name +
                                              "': " + r.error().message);
       out.parent_from_child = r->parent_from_child;
       out.iterations = r->iterations;

@@ -6,6 +6,7 @@
 #include "core/common/log.h"
 #include "core/georef/checker_targets.h"
 #include "core/georef/sphere_targets.h"
+#include "core/pipeline/scan_store.h"
 
 namespace scanreg::pipeline {
 
@@ -17,8 +18,15 @@ std::string ControlGrade(const io::ControlResidualRecord& row, double tolerance_
 Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const std::vector<Scan>& scans,
                                                    const RegisterOptions& options, ProgressSink& progress,
                                                    const CancelToken& cancel) {
+  ScanStore store(scans);
+  return GeoreferenceProject(project, store, options, progress, cancel);
+}
+
+Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, ScanStore& scans,
+                                                   const RegisterOptions& options, ProgressSink& progress,
+                                                   const CancelToken& cancel) {
   project.georef.reset();
-  if (scans.size() != project.scans.size()) {
+  if (scans.size() != static_cast<int>(project.scans.size())) {
     return MakeError(ErrorCode::kInvalidArgument, "georeferencing: the scans do not match the project's");
   }
   if (project.control.empty()) {
@@ -43,7 +51,9 @@ Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const s
   for (std::size_t k = 0; k < scan_of.size(); ++k) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "georeferencing cancelled");
     progress.Report(0.8 * k / scan_of.size(), "finding targets in " + project.scans[scan_of[k]].name);
-    const Scan& scan = scans[scan_of[k]];
+    const Expected<std::shared_ptr<const Scan>> read = scans.Get(scan_of[k]);
+    if (!read) return read.error();
+    const Scan& scan = **read;
     auto spheres = georef::DetectSphereTargets(scan, options.spheres, cancel);
     if (!spheres) return spheres.error();
     std::vector<io::TargetRecord> found;

@@ -18,9 +18,14 @@
 
 namespace scanreg::pipeline {
 
-// scans: the project's scans in its order (LoadProjectScans). On error the project is unchanged
-// apart from project.georef, which is dropped (its poses stay in the registration's frame).
+// scans: the project's scans in its order (LoadProjectScans), or a store of them (read one at a
+// time). On error the project is unchanged apart from project.georef, which is dropped (its poses
+// stay in the registration's frame).
+class ScanStore;
 Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, const std::vector<Scan>& scans,
+                                                   const RegisterOptions& options, ProgressSink& progress,
+                                                   const CancelToken& cancel);
+Expected<georef::GeorefResult> GeoreferenceProject(io::Project& project, ScanStore& scans,
                                                    const RegisterOptions& options, ProgressSink& progress,
                                                    const CancelToken& cancel);
 

@@ -35,8 +35,8 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
                           const RegisterOptions& options, double evidence_m, const CancelToken& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   io::LinkRecord link;
-  link.parent = parent.scan->name;
-  link.child = child.scan->name;
+  link.parent = parent.name;
+  link.child = child.name;
   link.method = std::string("none+") + FineMethodName(options.fine);
   link.parent_from_child = initial;
   // EM from far (the reach several times the evidence distance) stalls on a wrong pose where
@@ -73,7 +73,10 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     const LinkThresholds& t = options.thresholds;
     std::string reason;
     link.status = io::LinkStatus::kOk;
-    if (fine->iterations == 0) {  // not one step: the pose is the start pose, with no evidence of ours
+    if (!e.unavailable.empty()) {
+      link.status = io::LinkStatus::kFailed;
+      link.reason = e.unavailable;
+    } else if (fine->iterations == 0) {  // not one step: the pose is the start pose, with no evidence of ours
       link.status = io::LinkStatus::kFailed;
       link.reason = Format(
           "the fine step could not start: too few correspondences within the overlap distance %.1f mm at "
@@ -135,7 +138,7 @@ Expected<io::LinkRecord> RefinePairFromPose(const Scan& parent, const Scan& chil
       if (scans[k]->valid[i]) pts.push_back(scans[k]->points[i].cast<double>());
     if (pts.empty())
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[k]->name + "' has no valid point; remove it");
-    prepared[k].scan = scans[k];
+    HoldScan(*scans[k], &prepared[k]);
     prepared[k].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
   }
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "refinement cancelled");

@@ -70,7 +70,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
       if (scans[i].valid[k]) pts.push_back(scans[i].points[k].cast<double>());
     if (pts.empty())
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
-    prepared[i].scan = &scans[i];
+    HoldScan(scans[i], &prepared[i]);
     prepared[i].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
     index[i] = std::make_unique<PointIndex>(prepared[i].samples);
   }

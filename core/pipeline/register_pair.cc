@@ -5,9 +5,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <optional>
 
 #include "core/geometry/transform.h"
 #include "core/pipeline/fine_align.h"
+#include "core/pipeline/scan_store.h"
+#include "core/registration/reliable_points.h"
 #include "core/registration/consistency.h"
 #include "core/registration/plan_view.h"
 #include "core/registration/point_index.h"
@@ -73,9 +77,41 @@ std::string SurfaceWeakness(const LinkThresholds& t, const io::LinkRecord& link)
   return "";
 }
 
-void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
+namespace {
+
+// Angular spacing of the grid (radians): the larger of the column and row steps; 0 when unknown.
+double AngularStep(const Scan& scan) {
+  if (scan.angles.empty() || scan.cols < 2 || scan.rows < 2) return 0.0;
+  const double az = std::abs(scan.angles.azimuth.back() - scan.angles.azimuth.front()) / (scan.cols - 1);
+  const double el = std::abs(scan.angles.elevation.back() - scan.angles.elevation.front()) / (scan.rows - 1);
+  return std::max(az, el);
+}
+
+}  // namespace
+
+Expected<std::shared_ptr<const Scan>> PreparedScan::Full() const {
+  if (scan) return std::shared_ptr<const Scan>(std::shared_ptr<const Scan>(), scan);
+  if (!store) return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "' is not available");
+  Expected<std::shared_ptr<const Scan>> full = store->Get(index);
+  if (!full) return MakeError(full.error().code, "scan '" + name + "' could not be read again: " + full.error().message);
+  return full;
+}
+
+void HoldScan(const Scan& scan, PreparedScan* prepared) {
+  prepared->name = scan.name;
   prepared->scan = &scan;
-  prepared->confidence = ConfidenceMap(scan, options.reliability);
+  prepared->angular_step = AngularStep(scan);
+}
+
+void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
+  HoldScan(scan, prepared);
+  const std::vector<std::uint8_t> confidence = ConfidenceMap(scan, options.reliability);
+  prepared->keypoint_points.clear();
+  prepared->keypoint_points.reserve(prepared->features.keypoints.size());
+  for (const Keypoint& k : prepared->features.keypoints) {
+    const std::optional<Eigen::Vector3f> p = InterpolatePoint(scan, confidence, k.u, k.v);
+    prepared->keypoint_points.push_back(p ? *p : Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  }
   prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
   prepared->plan = MakePlanView(prepared->geometric);
   if (options.fine == FineMethod::kDense && !prepared->samples.empty())
@@ -131,21 +167,18 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   e.rms_m = overlapping ? std::sqrt(sum_sq / double(overlapping)) : 0.0;
   FreeSpaceOptions free_space;
   free_space.margin_m = 2 * max_distance_m;
-  const PairFreeSpace f = PairFreeSpaceCheck(*parent.scan, *child.scan, parent_from_child, free_space);
+  const Expected<std::shared_ptr<const Scan>> a = parent.Full(), b = child.Full();
+  if (!a || !b) {
+    e.unavailable = (a ? b : a).error().message;
+    return e;
+  }
+  const PairFreeSpace f = PairFreeSpaceCheck(**a, **b, parent_from_child, free_space);
   e.conflict = f.conflict();
   e.moving = f.moving();
   return e;
 }
 
 namespace {
-
-// Angular spacing of the grid (radians): the larger of the column and row steps; 0 when unknown.
-double AngularStep(const Scan& scan) {
-  if (scan.angles.empty() || scan.cols < 2 || scan.rows < 2) return 0.0;
-  const double az = std::abs(scan.angles.azimuth.back() - scan.angles.azimuth.front()) / (scan.cols - 1);
-  const double el = std::abs(scan.angles.elevation.back() - scan.angles.elevation.front()) / (scan.rows - 1);
-  return std::max(az, el);
-}
 
 bool Distinct(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, const CoarseOptions& o) {
   return (a.translation() - b.translation()).norm() > o.ambiguity_distance_m ||
@@ -202,8 +235,8 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   const auto t0 = std::chrono::steady_clock::now();
   PairResult result;
   io::LinkRecord& link = result.link;
-  link.parent = parent.scan->name;
-  link.child = child.scan->name;
+  link.parent = parent.name;
+  link.child = child.name;
   link.method = std::string(CoarseMethodName(options.coarse.method)) + "+" + FineMethodName(options.fine);
   link.matches = static_cast<int>(matches.size());
   link.geometric_matches = static_cast<int>(geometric.size());
@@ -223,13 +256,11 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   std::vector<double> ranges;
   std::vector<int> match_of_corr;  // corr[k] comes from matches[match_of_corr[k]]
   for (const FeatureMatch& m : matches) {
-    const Keypoint& kp = parent.features.keypoints[m.query];
-    const Keypoint& kc = child.features.keypoints[m.train];
-    const auto p = InterpolatePoint(*parent.scan, parent.confidence, kp.u, kp.v);
-    const auto c = InterpolatePoint(*child.scan, child.confidence, kc.u, kc.v);
-    if (!p || !c) continue;
-    corr.push_back({p->cast<double>(), c->cast<double>()});
-    ranges.push_back(c->norm());
+    const Eigen::Vector3f& p = parent.keypoint_points[m.query];
+    const Eigen::Vector3f& c = child.keypoint_points[m.train];
+    if (!p.allFinite() || !c.allFinite()) continue;
+    corr.push_back({p.cast<double>(), c.cast<double>()});
+    ranges.push_back(c.norm());
     match_of_corr.push_back(static_cast<int>(&m - matches.data()));
   }
   const int n_sift = static_cast<int>(corr.size());
@@ -243,7 +274,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
 
   // Keypoint localisation error grows with range: about two grid steps of angle (ours; W uses
   // fixed thresholds, which at 15 m and 0.24° would reject most true pairs).
-  const double angular = 2.0 * std::max(AngularStep(*parent.scan), AngularStep(*child.scan));
+  const double angular = 2.0 * std::max(parent.angular_step, child.angular_step);
   CoarseOptions coarse_options = options.coarse;
   if (!ranges.empty()) {
     std::nth_element(ranges.begin(), ranges.begin() + ranges.size() / 2, ranges.end());
@@ -334,6 +365,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   for (std::size_t i = 0; i < rank.size(); ++i) rank[i] = static_cast<int>(i);
   std::stable_sort(rank.begin(), rank.end(), [&](int a, int b) { return Score(hyps[a]) > Score(hyps[b]); });
   const Hypothesis& best = hyps[rank[0]];
+  if (!best.evidence.unavailable.empty()) return fail(best.evidence.unavailable);
   const bool best_from_plan = hyp_from_plan[rank[0]];
   if (best_from_plan) {
     link.method = "plan+" + std::string(FineMethodName(options.fine)) + " levelled";

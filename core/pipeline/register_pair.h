@@ -20,18 +20,34 @@
 
 namespace scanreg::pipeline {
 
-// A scan with what the registration derives from it once.
+class ScanStore;  // scan_store.h
+
+// A scan with what the registration derives from it once: all its pairs need, except the free-space
+// test and EM fine alignment, which read the full scan (Full()).
 struct PreparedScan {
+  std::string name;
+  // The full scan: the caller's (it outlives this), or else scan `index` of `store` (read again when
+  // the store dropped it under its memory budget).
   const Scan* scan = nullptr;
+  ScanStore* store = nullptr;
+  int index = -1;
   ScanFeatures features;        // SIFT (empty when not used)
+  std::vector<Eigen::Vector3f> keypoint_points;  // per SIFT keypoint: its reliable 3D point (W §2 step 5), NaN if none
+  double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
-  std::vector<std::uint8_t> confidence;  // W §2 step 5
   std::vector<Eigen::Vector3d> samples;  // valid points voxel-downsampled at the dense ICP voxel
   std::shared_ptr<const IcpSurface> surface;  // the samples prepared as a dense ICP parent (fine = dense)
+
+  // The full scan; an error when the store cannot read it again.
+  Expected<std::shared_ptr<const Scan>> Full() const;
 };
 
-// Features are detected by the caller; this fills confidence, samples and the plan view.
+// Sets name, scan and angular step from a scan the caller keeps.
+void HoldScan(const Scan& scan, PreparedScan* prepared);
+
+// Features are detected by the caller; this holds the scan (HoldScan) and fills the keypoints' 3D
+// points, the samples and the plan view.
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared);
 
 struct PairResult {
@@ -65,6 +81,7 @@ struct AlignmentEvidence {
   double rms_m = 0.0;     // RMS distance of those samples
   double conflict = 0.0;  // free-space violations on static surfaces, the larger of both directions (visibility.h)
   double moving = 0.0;    // free-space violations in object-sized clusters (moving objects), the larger of both
+  std::string unavailable;  // why the free-space test could not run (a full scan could not be read again)
 };
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m);

@@ -23,6 +23,7 @@
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
 #include "core/pipeline/scale_defaults.h"
+#include "core/pipeline/scan_store.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -131,48 +132,89 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& raw_options, ProgressSink& progress,
                                             const CancelToken& cancel, const PairExchange* exchange) {
+  ScanStore store(scans);
+  return RegisterScans(store, user, raw_options, progress, cancel, exchange);
+}
+
+Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices& user,
+                                            const RegisterOptions& raw_options, ProgressSink& progress,
+                                            const CancelToken& cancel, const PairExchange* exchange) {
   if (Status s = raw_options.Validate(); !s) return s.error();
-  const int n = static_cast<int>(scans.size());
+  const std::vector<Scan>& scans = store.heads();  // names and poses; the points come from the store
+  const int n = store.size();
   NullProgress null_progress;
   if (n < 2) return MakeError(ErrorCode::kInvalidArgument, "registration needs at least two scans");
-  for (const Scan& s : scans) {
-    if (s.CountValid() == 0) {
-      return MakeError(ErrorCode::kInvalidArgument, "scan '" + s.name + "' has no valid point; remove it");
-    }
-  }
   if (raw_options.from_current_poses && exchange)
     return MakeError(ErrorCode::kInvalidArgument, "pair jobs register from features; with --coarse none (refining "
                                                   "the current poses) register in one process");
-  if (raw_options.from_current_poses)
-    return RegisterFromCurrentPoses(scans, user, raw_options, progress, cancel);
-  std::vector<const Scan*> all;
-  for (const Scan& s : scans) all.push_back(&s);
-  const Expected<RegisterOptions> resolved = ResolveLengths(raw_options, all);
-  if (!resolved) return resolved.error();
-  const RegisterOptions& options = *resolved;
+  if (raw_options.from_current_poses) {  // dense refinement of every overlapping pair: every scan at once
+    if (const std::vector<Scan>* all = store.in_memory()) return RegisterFromCurrentPoses(*all, user, raw_options, progress, cancel);
+    std::vector<Scan> all;
+    for (int i = 0; i < n; ++i) {
+      Expected<std::shared_ptr<const Scan>> s = store.Get(i);
+      if (!s) return s.error();
+      all.push_back(**s);
+    }
+    return RegisterFromCurrentPoses(all, user, raw_options, progress, cancel);
+  }
   const auto t_start = std::chrono::steady_clock::now();
   ProjectRegistration result;
 
-  // The user's choices are checked before the features are computed.
-  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, user, options.root);
+  // The user's choices are checked before the scans are read.
+  Expected<ScanOrderChoices> choices = ResolveScanOrderChoices(scans, user, raw_options.root);
   if (!choices) return choices.error();
 
-  // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
-  // Scans are independent: prepared concurrently (issue 13, item 4), each result in its own slot,
-  // so the outcome does not depend on the thread count; the first error in scan order is returned.
-  std::vector<PreparedScan> prepared(n);
+  // Each scan read once for its scale (when a length is left to the data) and its valid points;
+  // then again (from the store, resident or not) for its features. Scans are independent: prepared
+  // concurrently (issue 13, item 4), each result in its own slot, so the outcome does not depend on
+  // the thread count; the first error in scan order is returned.
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<Status> prepared_ok(n, Status::Ok());
-  std::vector<char> from_cache(n, 0);
+  const bool measure = NeedsScale(raw_options);
+  std::vector<DataScale> scales(n);
+  std::vector<Status> read_ok(n, Status::Ok());
   std::atomic<int> scans_done{0};
 #pragma omp parallel for schedule(dynamic, 1)
   for (int i = 0; i < n; ++i) {
     if (cancel.IsCancelled()) continue;
+    Expected<std::shared_ptr<const Scan>> scan = store.Get(i);
+    if (!scan) {
+      read_ok[i] = scan.error();
+    } else if ((*scan)->CountValid() == 0) {
+      read_ok[i] = MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
+    } else if (measure) {
+      scales[i] = MeasureDataScale(**scan);
+    }
+    const int done = ++scans_done;
+    progress.Report(0.05 * done / n, "read " + std::to_string(done) + " of " + std::to_string(n) + " scans");
+  }
+  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
+  for (int i = 0; i < n; ++i)
+    if (!read_ok[i]) return read_ok[i].error();
+  const Expected<RegisterOptions> resolved = ResolveLengthsFromScales(raw_options, scales);
+  if (!resolved) return resolved.error();
+  const RegisterOptions& options = *resolved;
+
+  // W §2 steps 1 and 5: features and confidence maps, once per scan; FPFH beside SIFT (issue 11).
+  std::vector<PreparedScan> prepared(n);
+  std::vector<Status> prepared_ok(n, Status::Ok());
+  std::vector<char> from_cache(n, 0);
+  scans_done = 0;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int i = 0; i < n; ++i) {
+    if (cancel.IsCancelled()) continue;
+    Expected<std::shared_ptr<const Scan>> scan = store.Get(i);
+    if (!scan) {
+      prepared_ok[i] = scan.error();
+      continue;
+    }
     bool cached = false;
-    prepared_ok[i] = PrepareScanFeatures(scans[i], options, &prepared[i], &cached, cancel);
+    prepared_ok[i] = PrepareScanFeatures(**scan, options, &prepared[i], &cached, cancel);
+    prepared[i].scan = nullptr;  // from here on, the store's
+    prepared[i].store = &store;
+    prepared[i].index = i;
     from_cache[i] = cached;
     const int done = ++scans_done;
-    progress.Report(0.3 * done / n, "features of " + std::to_string(done) + " of " + std::to_string(n) + " scans");
+    progress.Report(0.05 + 0.25 * done / n, "features of " + std::to_string(done) + " of " + std::to_string(n) + " scans");
   }
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
   for (int i = 0; i < n; ++i) {
@@ -205,8 +247,8 @@ Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, cons
     LogInfo("matching " + std::to_string(result.pairs_matched) + " candidate pairs of " +
             std::to_string(result.pairs_possible) + " (" + std::to_string(options.candidates) +
             " best-voted scans each, neighbours in capture order, the user's pairs)");
-  std::vector<ScanFeatures> features;
-  for (const PreparedScan& p : prepared) features.push_back(p.features);
+  std::vector<ScanFeatures> features;  // moved out: the pairs need the keypoints' 3D points only
+  for (PreparedScan& p : prepared) features.push_back(std::move(p.features));
   SubProgress match_progress(progress, 0.3, 0.5);
   Expected<MatchTable> table = MatchPairs(features, pairs, options.match, match_progress, cancel);
   if (!table) return table.error();
@@ -358,6 +400,13 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
                                                    const CancelToken& cancel, const PairExchange* exchange) {
+  ScanStore store(scans);
+  return RegisterProjectScans(project, store, options, progress, cancel, exchange);
+}
+
+Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, ScanStore& scans, RegisterOptions options,
+                                                   ProgressSink& progress, const CancelToken& cancel,
+                                                   const PairExchange* exchange) {
   const std::size_t n = project.scans.size();
   // The scans this run may place (options.only_scans; default all); the others keep pose and links.
   std::vector<bool> in_scope(n, options.only_scans.empty());

@@ -96,11 +96,16 @@ Expected<ScanOrderChoices> ResolveScanOrderChoices(const std::vector<Scan>& scan
                                                    const std::optional<std::string>& root);
 
 // scans: with their current world_from_scan (the root keeps its own). exchange: pair
-// registrations planned as jobs, or collected from them (pair_jobs.h).
+// registrations planned as jobs, or collected from them (pair_jobs.h). From a store (scan_store.h)
+// the scans are read when needed, within its memory budget: the same result as from memory.
 struct PairExchange;
+class ScanStore;
 Expected<ProjectRegistration> RegisterScans(const std::vector<Scan>& scans, const UserChoices& user,
                                             const RegisterOptions& options, ProgressSink& progress,
                                             const CancelToken& cancel, const PairExchange* exchange = nullptr);
+Expected<ProjectRegistration> RegisterScans(ScanStore& scans, const UserChoices& user, const RegisterOptions& options,
+                                            ProgressSink& progress, const CancelToken& cancel,
+                                            const PairExchange* exchange = nullptr);
 
 // Writes the result into the project: poses, registered flags, links and root.
 void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
@@ -113,6 +118,9 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project);
 Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, const std::vector<Scan>& scans,
                                                    RegisterOptions options, ProgressSink& progress,
                                                    const CancelToken& cancel, const PairExchange* exchange = nullptr);
+Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, ScanStore& scans, RegisterOptions options,
+                                                   ProgressSink& progress, const CancelToken& cancel,
+                                                   const PairExchange* exchange = nullptr);
 
 // options.keep_imported: the project's imported poses are anchors. Each other registered scan is
 // placed from its nearest anchor up the scan order (its pose relative to that anchor as registered);

@@ -35,9 +35,14 @@ bool AnyUnset(const RegisterOptions& o) {
 }  // namespace
 
 ProjectScale MeasureProjectScale(const std::vector<const Scan*>& scans) {
+  std::vector<DataScale> scales;
+  for (const Scan* s : scans) scales.push_back(MeasureDataScale(*s));
+  return MeasureProjectScale(scales);
+}
+
+ProjectScale MeasureProjectScale(const std::vector<DataScale>& scales) {
   std::vector<double> spacing, extent, noise, voxel;
-  for (const Scan* s : scans) {
-    const DataScale d = MeasureDataScale(*s);
+  for (const DataScale& d : scales) {
     if (!d.ok()) continue;
     spacing.push_back(d.spacing_m);
     extent.push_back(d.extent_m);
@@ -68,10 +73,20 @@ RegisterOptions WithLengths(RegisterOptions o, double noise_m, double overlap_di
   return o;
 }
 
+bool NeedsScale(const RegisterOptions& o) { return AnyUnset(o); }
+
 Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::vector<const Scan*>& scans,
                                          ProjectScale* measured) {
   if (!AnyUnset(o)) return o;
-  const ProjectScale scale = MeasureProjectScale(scans);
+  std::vector<DataScale> scales;
+  for (const Scan* s : scans) scales.push_back(MeasureDataScale(*s));
+  return ResolveLengthsFromScales(o, scales, measured);
+}
+
+Expected<RegisterOptions> ResolveLengthsFromScales(const RegisterOptions& o, const std::vector<DataScale>& scales,
+                                         ProjectScale* measured) {
+  if (!AnyUnset(o)) return o;
+  const ProjectScale scale = MeasureProjectScale(scales);
   if (measured) *measured = scale;
   if (!(scale.spacing_m > 0)) {
     return MakeError(ErrorCode::kInvalidArgument,

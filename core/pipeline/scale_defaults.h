@@ -10,6 +10,7 @@
 #include "core/common/expected.h"
 #include "core/geometry/scan.h"
 #include "core/pipeline/register_options.h"
+#include "core/registration/data_scale.h"
 
 namespace scanreg::pipeline {
 
@@ -19,6 +20,7 @@ struct ProjectScale {
   double geometric_voxel_m = 0;  // median over the scans of SuggestVoxel's rule (FPFH samples)
 };
 ProjectScale MeasureProjectScale(const std::vector<const Scan*>& scans);
+ProjectScale MeasureProjectScale(const std::vector<DataScale>& scans);
 
 // The overlap distance of a project's data: max(8 x noise, 2 x spacing, extent / 100) — a sample of
 // a surface seen by both scans lies within it of the other's samples (noise on both sides, sampling
@@ -35,6 +37,11 @@ RegisterOptions WithLengths(RegisterOptions o, double noise_m, double overlap_di
 // measured once, only when something is unset; the choices are logged). Errors when the scans give no scale (fewer than 20 valid points).
 // *measured (optional): the scale, when it was measured.
 Expected<RegisterOptions> ResolveLengths(const RegisterOptions& o, const std::vector<const Scan*>& scans,
+                                         ProjectScale* measured = nullptr);
+// The same from each scan's MeasureDataScale, taken one scan at a time (scans not all in memory);
+// `scales` is used only when NeedsScale(o).
+bool NeedsScale(const RegisterOptions& o);
+Expected<RegisterOptions> ResolveLengthsFromScales(const RegisterOptions& o, const std::vector<DataScale>& scales,
                                          ProjectScale* measured = nullptr);
 
 // How far apart the scans' current poses are (refinement from current poses): over every pair of

@@ -1,0 +1,147 @@
+#include "core/pipeline/scan_store.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <unistd.h>
+
+#include "core/pipeline/project_scans.h"
+
+namespace scanreg::pipeline {
+
+std::size_t ScanBytes(const Scan& scan) {
+  return scan.points.capacity() * sizeof(Eigen::Vector3f) + scan.reflectance.capacity() * sizeof(float) +
+         scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float);
+}
+
+std::size_t DefaultMemoryBudget() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  const std::size_t ram = pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page) : 0;
+  return std::max<std::size_t>(ram / 4, std::size_t(1) << 30);
+}
+
+Expected<std::size_t> ParseMemoryBudget(const std::string& text) {
+  const auto bad = [&]() -> Error {
+    return MakeError(ErrorCode::kInvalidArgument, "memory budget '" + text +
+                                                      "' is not a size: give e.g. 6G, 800M or 1.5G (at least 1M)");
+  };
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return bad();
+  }
+  const std::string unit = text.substr(used);
+  double scale = 0;
+  if (unit.empty() || unit == "G" || unit == "g" || unit == "GB") scale = 1024.0 * 1024 * 1024;
+  if (unit == "M" || unit == "m" || unit == "MB") scale = 1024.0 * 1024;
+  if (unit == "T" || unit == "t" || unit == "TB") scale = 1024.0 * 1024 * 1024 * 1024;
+  const double bytes = value * scale;
+  if (!(scale > 0) || !std::isfinite(bytes) || bytes < 1024.0 * 1024 || bytes > 1e18) return bad();
+  return static_cast<std::size_t>(bytes);
+}
+
+std::string FormatBytes(std::size_t bytes) {
+  char buf[32];
+  if (bytes >= (std::size_t(1) << 30)) {
+    std::snprintf(buf, sizeof buf, "%.1f GB", bytes / double(1 << 30));
+  } else {
+    std::snprintf(buf, sizeof buf, "%.0f MB", bytes / double(1 << 20));
+  }
+  return buf;
+}
+
+Scan ScanHead(const Scan& scan) {
+  Scan head;
+  head.name = scan.name;
+  head.rows = scan.rows;
+  head.cols = scan.cols;
+  head.world_from_scan = scan.world_from_scan;
+  head.reference_world_from_scan = scan.reference_world_from_scan;
+  return head;
+}
+
+ScanStore::ScanStore(std::vector<Scan> heads, Reader read, std::size_t budget_bytes)
+    : heads_(std::move(heads)), read_(std::move(read)), budget_(budget_bytes) {
+  resident_.resize(heads_.size());
+  bytes_.assign(heads_.size(), 0);
+  for (std::size_t i = 0; i < heads_.size(); ++i) reading_.push_back(std::make_unique<std::mutex>());
+}
+
+ScanStore::ScanStore(const std::vector<Scan>& scans) : caller_(&scans) {
+  for (const Scan& s : scans) heads_.push_back(ScanHead(s));
+}
+
+Expected<std::shared_ptr<const Scan>> ScanStore::Get(int index) {
+  if (index < 0 || index >= size())
+    return MakeError(ErrorCode::kInvalidArgument, "scan number " + std::to_string(index) + " is not in the project");
+  if (caller_) return std::shared_ptr<const Scan>(std::shared_ptr<const Scan>(), &(*caller_)[index]);
+  std::lock_guard<std::mutex> one_reader(*reading_[index]);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (resident_[index]) {
+      recent_.remove(index);
+      recent_.push_front(index);
+      return resident_[index];
+    }
+  }
+  Expected<Scan> read = read_(index);  // outside the store's lock: other scans are served meanwhile
+  if (!read) return read.error();
+  const Scan& head = heads_[index];
+  read->name = head.name;
+  read->world_from_scan = head.world_from_scan;
+  read->reference_world_from_scan = head.reference_world_from_scan;
+  auto scan = std::make_shared<const Scan>(std::move(*read));
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++reads_;
+  resident_[index] = scan;
+  bytes_[index] = ScanBytes(*scan);
+  held_ += bytes_[index];
+  recent_.push_front(index);
+  Trim();
+  peak_ = std::max(peak_, held_);
+  return scan;
+}
+
+void ScanStore::Trim() {
+  // Least recently used first; the scan just read (the front) always stays.
+  while (held_ > budget_ && recent_.size() > 1) {
+    const int i = recent_.back();
+    recent_.pop_back();
+    held_ -= bytes_[i];
+    bytes_[i] = 0;
+    resident_[i].reset();  // freed now, or when its last user lets go
+  }
+}
+
+int ScanStore::reads() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return reads_;
+}
+
+std::size_t ScanStore::peak_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return peak_;
+}
+
+ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes) {
+  std::vector<Scan> heads;
+  for (const io::ProjectScan& ps : project.scans) {
+    Scan head;
+    head.name = ps.name;
+    head.world_from_scan = ps.world_from_scan;
+    head.reference_world_from_scan = ps.reference_world_from_scan;
+    heads.push_back(std::move(head));
+  }
+  auto read = [project](int index) -> Expected<Scan> {
+    NullProgress quiet;
+    Expected<std::vector<Scan>> one = LoadProjectScans(project, quiet, CancelToken(), {index});
+    if (!one) return one.error();
+    return std::move(one->front());
+  };
+  return ScanStore(std::move(heads), read, budget_bytes);
+}
+
+}  // namespace scanreg::pipeline
