@@ -11,6 +11,7 @@
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
+#include "core/pipeline/scan_store.h"
 
 namespace scanreg::cli {
 namespace fs = std::filesystem;
@@ -25,13 +26,14 @@ std::vector<std::string> ScanNames(const io::Project& project) {
 
 }  // namespace
 
-int PlanPairJobs(io::Project& project, pipeline::RegisterOptions options, const fs::path& dir) {
+int PlanPairJobs(io::Project& project, pipeline::RegisterOptions options, const fs::path& dir,
+                 std::size_t memory_budget) {
   Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register --plan");
   if (!lock) return Fail(lock.error());
   TerminalProgress progress;
   CancelToken cancel;
-  auto loaded = pipeline::LoadProjectScans(project, progress, cancel);
-  if (!loaded) return Fail(loaded.error());
+  pipeline::ScanStore store =
+      pipeline::ProjectScanStore(project, memory_budget > 0 ? memory_budget : pipeline::DefaultMemoryBudget());
   pipeline::PairJobPlan plan;
   plan.project = fs::absolute(project.file).lexically_normal();
   plan.settings = pipeline::SettingsText(project.settings);
@@ -43,7 +45,7 @@ int PlanPairJobs(io::Project& project, pipeline::RegisterOptions options, const 
     plan.geometric_voxel_m = resolved.geometric.voxel_m;
     plan.pairs = pairs;
   };
-  auto result = pipeline::RegisterProjectScans(project, *loaded, options, progress, cancel, &exchange);
+  auto result = pipeline::RegisterProjectScans(project, store, options, progress, cancel, &exchange);
   if (!result) return Fail(result.error());
   if (plan.pairs.empty()) return Fail(MakeError(ErrorCode::kFailed, "register --plan: no pair to register"));
   // The settings the jobs and the collect read are the ones planned.

@@ -13,6 +13,7 @@
 #include "core/io/project_lock.h"
 #include "core/pipeline/pair_jobs.h"
 #include "core/pipeline/project_scans.h"
+#include "core/pipeline/scan_store.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
 
@@ -159,24 +160,31 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
 }  // namespace
 
 int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, bool json,
-                      const pipeline::PairExchange* exchange) {
+                      const pipeline::PairExchange* exchange, std::size_t memory_budget) {
   // One writer at a time: a second register on this project refuses now, not after minutes of work.
   Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register");
   if (!lock) return Fail(lock.error());
   TerminalProgress progress;
   CancelToken cancel;
-  auto loaded = pipeline::LoadProjectScans(project, progress, cancel);
-  if (!loaded) return Fail(loaded.error());
-  auto result = pipeline::RegisterProjectScans(project, *loaded, options, progress, cancel, exchange);
+  pipeline::ScanStore store =
+      pipeline::ProjectScanStore(project, memory_budget > 0 ? memory_budget : pipeline::DefaultMemoryBudget());
+  auto result = pipeline::RegisterProjectScans(project, store, options, progress, cancel, exchange);
   if (!result) return Fail(result.error());
   if (Status s = io::SaveProject(project, project.file); !s) return Fail(s.error());
-  const auto errors = pipeline::ReferenceErrors(*result, *loaded);
+  const std::vector<Scan>& scans = store.heads();
+  const auto errors = pipeline::ReferenceErrors(*result, scans);
   if (json) {
-    nlohmann::json out = ToJson(*result, *loaded, errors);
+    nlohmann::json out = ToJson(*result, scans, errors);
+    out["memory"] = {{"budget_bytes", store.budget_bytes()},
+                     {"peak_scan_bytes", store.peak_bytes()},
+                     {"scan_reads", store.reads()}};
     if (!project.control.empty()) out["georef"] = GeorefJson(project, *result);
     std::printf("%s\n", out.dump(2).c_str());
   } else {
-    PrintText(*result, *loaded, errors);
+    PrintText(*result, scans, errors);
+    std::printf("scans: read %d times for %zu scans, at most %s held (memory budget %s)\n", store.reads(),
+                scans.size(), pipeline::FormatBytes(store.peak_bytes()).c_str(),
+                pipeline::FormatBytes(store.budget_bytes()).c_str());
     PrintGeoref(project, *result);
   }
   int unregistered = 0;
@@ -249,7 +257,11 @@ int RunRegister(const std::vector<std::string>& argv) {
         "(run each with scanreg-cli pair-job DIR K, e.g. as a Slurm array), and stop"},
        {"collect", true, false,
         "DIR      register with the pair registrations of the jobs planned in DIR (the same result as "
-        "without them; a pair with no job result is registered here)"}},
+        "without them; a pair with no job result is registered here)"},
+       {"memory-budget", true, false,
+        "SIZE     hold at most this much of full scans in memory (e.g. 6G, 800M); the others are read "
+        "again from the binary scan cache when a pair needs them (default: a quarter of the RAM). The "
+        "result does not depend on it"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
@@ -315,15 +327,21 @@ int RunRegister(const std::vector<std::string>& argv) {
   pipeline::StoreRegisterSettings(*options, &project->settings);
   if (args->Has("plan") && args->Has("collect"))
     return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give --plan or --collect, not both"));
-  if (auto dir = args->Get("plan")) return PlanPairJobs(*project, *options, *dir);
+  std::size_t budget = 0;
+  if (auto text = args->Get("memory-budget")) {
+    Expected<std::size_t> parsed = pipeline::ParseMemoryBudget(*text);
+    if (!parsed) return Fail(MakeError(parsed.error().code, "register: --memory-budget: " + parsed.error().message));
+    budget = *parsed;
+  }
+  if (auto dir = args->Get("plan")) return PlanPairJobs(*project, *options, *dir, budget);
   if (auto dir = args->Get("collect")) {
     std::map<std::pair<int, int>, pipeline::PairResult> results;
     if (Status s = CollectPairJobs(*project, *dir, &*options, &results); !s) return Fail(s.error());
     pipeline::PairExchange exchange;
     exchange.results = &results;
-    return RegisterAndReport(*project, *options, args->Has("json"), &exchange);
+    return RegisterAndReport(*project, *options, args->Has("json"), &exchange, budget);
   }
-  return RegisterAndReport(*project, *options, args->Has("json"));
+  return RegisterAndReport(*project, *options, args->Has("json"), nullptr, budget);
 }
 
 }  // namespace scanreg::cli

@@ -9,6 +9,7 @@
 #include "core/geometry/transform.h"
 #include "core/io/project.h"
 #include "tests/integration/cli_run.h"
+#include "tests/integration/same_registration.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg {
@@ -18,13 +19,8 @@ namespace fs = std::filesystem;
 using test::Quote;
 using test::RunCli;
 using test::RunResult;
-
-// A street of 6 stations whose candidate selection leaves pairs out (3 partners each).
-fs::path Street(const test::TempDir& dir, const std::string& name) {
-  const fs::path out = dir / name;
-  EXPECT_EQ(RunCli("simulate --stations 6 --spacing 5 --size 600x150 --seed 4 --out " + Quote(out)).status, 0);
-  return out / "project.scanreg.json";
-}
+using test::ExpectSameRegistration;
+using test::Street;
 
 int PlannedJobs(const fs::path& plan_dir) {
   std::ifstream in(plan_dir / "plan.json");
@@ -36,38 +32,6 @@ int RunJobsInParallel(const fs::path& plan_dir, int jobs) {
   const std::string cmd = "seq 0 " + std::to_string(jobs - 1) + " | xargs -P 2 -I K " + std::string(SCANREG_CLI) +
                           " pair-job " + Quote(plan_dir) + " K > /dev/null";
   return std::system(cmd.c_str());
-}
-
-// The registration of `spread` (collected from jobs) is the one of `single` (one process), and
-// that one is right (within 2 cm of the simulation's truth).
-void ExpectSameRegistration(const fs::path& single, const fs::path& spread) {
-  Expected<io::Project> a = io::LoadProject(single), b = io::LoadProject(spread);
-  ASSERT_TRUE(a.ok() && b.ok());
-  ASSERT_EQ(a->scans.size(), b->scans.size());
-  const Eigen::Isometry3d root_a = a->scans[0].world_from_scan, root_b = b->scans[0].world_from_scan;
-  for (std::size_t i = 0; i < a->scans.size(); ++i) {
-    const io::ProjectScan &sa = a->scans[i], &sb = b->scans[i];
-    ASSERT_TRUE(sa.registered) << sa.name;
-    EXPECT_EQ(sb.registered, sa.registered) << sa.name;
-    // Against the truth: the registration works (relative to the first scan, as the datum is free).
-    const Eigen::Isometry3d truth = a->scans[0].reference_world_from_scan->inverse() * *sa.reference_world_from_scan;
-    const PoseError error = ComparePoses(root_a.inverse() * sa.world_from_scan, truth);
-    EXPECT_LT(error.position_m, 0.02) << sa.name;
-    // And the spread run is the single one.
-    // (Matrices compared directly: an angle from acos is only good to ~2e-8 rad near identity.)
-    const Eigen::Matrix4d da = (root_a.inverse() * sa.world_from_scan).matrix();
-    const Eigen::Matrix4d db = (root_b.inverse() * sb.world_from_scan).matrix();
-    EXPECT_LT((da - db).cwiseAbs().maxCoeff(), 1e-9) << sa.name;
-  }
-  ASSERT_EQ(a->links.size(), b->links.size());
-  for (std::size_t k = 0; k < a->links.size(); ++k) {
-    const io::LinkRecord &la = a->links[k], &lb = b->links[k];
-    EXPECT_EQ(la.parent + ">" + la.child, lb.parent + ">" + lb.child) << "link " << k;
-    EXPECT_EQ(la.status, lb.status) << la.parent << ">" << la.child;
-    EXPECT_EQ(la.loop_check, lb.loop_check) << la.parent << ">" << la.child;
-    EXPECT_EQ(la.consistent, lb.consistent) << la.parent << ">" << la.child;
-    EXPECT_NEAR(la.rms_m, lb.rms_m, 1e-12) << la.parent << ">" << la.child;
-  }
 }
 
 TEST(PairJobs, PlanRunCollectGivesTheSingleProcessRegistration) {
