@@ -33,8 +33,8 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
                        "fine method 'keypoints' needs feature matches; use em, projective-icp or dense");
     case FineMethod::kDense: {
       Expected<IcpResult> icp =
-          parent.surface ? DenseIcpSurface(*parent.surface, child.samples, initial, options.dense_icp, quiet, cancel)
-                         : DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
+          parent.surface ? DenseIcpSurface(*parent.surface, child.Samples(), initial, options.dense_icp, quiet, cancel)
+                         : DenseIcpSamples(parent.Samples(), child.Samples(), initial, options.dense_icp, quiet, cancel);
       if (!icp) return icp.error();
       out.parent_from_child = icp->parent_from_child;
       out.iterations = icp->iterations;

@@ -114,8 +114,11 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   }
   prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
   prepared->plan = MakePlanView(prepared->geometric);
-  if (options.fine == FineMethod::kDense && !prepared->samples.empty())
-    prepared->surface = std::make_shared<IcpSurface>(prepared->samples, options.dense_icp);
+  prepared->surface.reset();
+  if (options.fine == FineMethod::kDense && !prepared->samples.empty()) {  // the samples move into the surface
+    prepared->surface = std::make_shared<IcpSurface>(std::move(prepared->samples), options.dense_icp);
+    prepared->samples.clear();
+  }
 }
 
 int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const std::vector<GeometricMatch>& geometric,
@@ -147,8 +150,8 @@ int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m) {
   AlignmentEvidence e;
-  const std::vector<Eigen::Vector3d>& parent_pts = parent.samples;
-  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.samples, 8000);
+  const std::vector<Eigen::Vector3d>& parent_pts = parent.Samples();
+  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.Samples(), 8000);
   if (parent_pts.size() < 8 || child_pts.empty()) return e;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(child_pts.size());

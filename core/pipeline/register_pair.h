@@ -36,8 +36,11 @@ struct PreparedScan {
   double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
-  std::vector<Eigen::Vector3d> samples;  // valid points voxel-downsampled at the dense ICP voxel
-  std::shared_ptr<const IcpSurface> surface;  // the samples prepared as a dense ICP parent (fine = dense)
+  // Valid points voxel-downsampled at the dense ICP voxel (read them with Samples()): here, or moved
+  // into `surface`, the samples prepared as a dense ICP parent (fine = dense).
+  std::vector<Eigen::Vector3d> samples;
+  std::shared_ptr<const IcpSurface> surface;
+  const std::vector<Eigen::Vector3d>& Samples() const { return surface ? surface->points : samples; }
 
   // The full scan; an error when the store cannot read it again.
   Expected<std::shared_ptr<const Scan>> Full() const;

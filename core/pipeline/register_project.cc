@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <malloc.h>
 #include <map>
 #include <memory>
 #include <set>
@@ -222,6 +223,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     result.features_from_cache += from_cache[i];
   }
   result.seconds_features = Since(t0);
+  malloc_trim(0);  // the panoramas, SIFT and FPFH work arrays of every thread are free now: return them
 
   // W §2 steps 2-3: matching and the confusion matrix, over the candidate pairs (issue 13, item 3:
   // every pair when options.candidates is 0); FPFH matches of the same pairs (parent i < child j).
@@ -314,15 +316,19 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
   // step, refined from those poses: bounding spheres first, then SampleOverlap on the voxel samples
   // within 3 overlap distances (the samples are a voxel of one overlap distance apart).
   std::vector<std::unique_ptr<PointIndex>> sample_index(n);
+  const auto index_of = [&](int i) -> const PointIndex& {
+    return prepared[i].surface ? *prepared[i].surface->index : *sample_index[i];
+  };
   const double reach = 3.0 * options.overlap_distance_m;
   source.overlap_at = [&](const std::vector<Eigen::Isometry3d>& world, const std::vector<bool>& placed) {
     Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);
     std::vector<double> radius(n, 0.0);
     for (int i = 0; i < n; ++i)
-      for (const Eigen::Vector3d& p : prepared[i].samples) radius[i] = std::max(radius[i], p.norm());
+      for (const Eigen::Vector3d& p : prepared[i].Samples()) radius[i] = std::max(radius[i], p.norm());
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int i = 0; i < n; ++i)
-      if (placed[i] && !sample_index[i]) sample_index[i] = std::make_unique<PointIndex>(prepared[i].samples);
+    for (int i = 0; i < n; ++i)  // the dense ICP surface's index when there is one (the same samples)
+      if (placed[i] && !prepared[i].surface && !sample_index[i])
+        sample_index[i] = std::make_unique<PointIndex>(prepared[i].Samples());
     std::vector<std::pair<int, int>> near;
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j)
@@ -332,8 +338,8 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     for (long k = 0; k < static_cast<long>(near.size()); ++k) {
       const auto [i, j] = near[k];
       const Eigen::Isometry3d i_from_j = world[i].inverse() * world[j];
-      overlap(i, j) = SampleOverlap(*sample_index[i], prepared[j].samples, i_from_j, reach);
-      overlap(j, i) = SampleOverlap(*sample_index[j], prepared[i].samples, i_from_j.inverse(), reach);
+      overlap(i, j) = SampleOverlap(index_of(i), prepared[j].Samples(), i_from_j, reach);
+      overlap(j, i) = SampleOverlap(index_of(j), prepared[i].Samples(), i_from_j.inverse(), reach);
     }
     return overlap;
   };

@@ -34,6 +34,8 @@ double Seconds(F&& f) {
 
 // Peak resident set size of this process so far, in MiB (from /proc/self/status VmHWM).
 double PeakMemoryMiB();
+// Starts the peak over (Linux: /proc/self/clear_refs), so the next PeakMemoryMiB is of what follows.
+void ResetPeakMemory();
 
 // Sections. Each takes the table and a "quick" flag (smaller sizes for a smoke run).
 void RunIoBench(Table& table, bool quick);
