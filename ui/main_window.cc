@@ -50,13 +50,13 @@ namespace {
 
 struct LoadedProject {
   io::Project project;
-  std::vector<Scan> scans;
+  std::vector<pipeline::ScanPreview> previews;
 };
 
-// Scans read for the open project (Add scans): the project with them appended, and the scans.
+// Scans read for the open project (Add scans): the project with them appended, and their previews.
 struct AddedScans {
   io::Project project;
-  std::vector<Scan> scans;
+  std::vector<pipeline::ScanPreview> previews;
   std::vector<std::string> skipped;  // why each file left out was left out
 };
 
@@ -65,10 +65,14 @@ struct Registered {
   Eigen::MatrixXi confusion;
 };
 
-Expected<LoadedProject> LoadJob(io::Project project, ProgressSink& progress, const CancelToken& cancel) {
-  Expected<std::vector<Scan>> scans = pipeline::LoadProjectScans(project, progress, cancel);
-  if (!scans) return scans.error();
-  return LoadedProject{std::move(project), std::move(*scans)};
+// The project's previews, one scan in memory at a time (issue 13: the desktop keeps previews).
+// preview_cells: what all previews share.
+Expected<LoadedProject> LoadJob(io::Project project, std::size_t preview_cells, ProgressSink& progress,
+                                const CancelToken& cancel) {
+  Expected<std::vector<pipeline::ScanPreview>> previews = pipeline::LoadScanPreviews(
+      project, pipeline::PreviewCellsPerScan(project.scans.size(), preview_cells), progress, cancel);
+  if (!previews) return previews.error();
+  return LoadedProject{std::move(project), std::move(*previews)};
 }
 
 }  // namespace
@@ -163,7 +167,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 MainWindow::~MainWindow() { SetLogHandler({}); }
 
 const io::Project& MainWindow::project() const { return doc_->project(); }
-const std::vector<Scan>& MainWindow::scans() const { return doc_->scans(); }
+const std::vector<pipeline::ScanPreview>& MainWindow::previews() const { return doc_->previews(); }
 const Eigen::MatrixXi& MainWindow::confusion() const { return doc_->confusion(); }
 QUndoStack* MainWindow::undoStack() const { return doc_->undoStack(); }
 bool MainWindow::dirty() const { return doc_->dirty(); }
@@ -385,24 +389,24 @@ bool MainWindow::OpenProject(const QString& path, const QString& scan_folder) {
   }
   return jobs_->Start<LoadedProject>(
       tr("Loading %1").arg(path),
-      [p = std::move(*project)](ProgressSink& progress, const CancelToken& cancel) {
-        return LoadJob(p, progress, cancel);
+      [p = std::move(*project), cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) {
+        return LoadJob(p, cells, progress, cancel);
       },
       [this, relinked](LoadedProject& loaded) {
-        OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans));
+        OnProjectLoaded(std::move(loaded.project), std::move(loaded.previews));
         if (relinked) doc_->MarkChanged();  // the new paths are not saved yet
       });
 }
 
-void MainWindow::OnProjectLoaded(io::Project project, std::vector<Scan> scans) {
-  doc_->Open(std::move(project), std::move(scans));
+void MainWindow::OnProjectLoaded(io::Project project, std::vector<pipeline::ScanPreview> previews) {
+  doc_->Open(std::move(project), std::move(previews));
   if (!this->project().file.empty()) AddRecentProject(QString::fromStdString(this->project().file.string()));
 }
 
 bool MainWindow::OpenDemoProject(const QString& dir) {
   return jobs_->Start<LoadedProject>(
       tr("Simulating the demo project"),
-      [dir](ProgressSink& progress, const CancelToken& cancel) -> Expected<LoadedProject> {
+      [dir, cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) -> Expected<LoadedProject> {
     SimulatedProjectOptions options;
     options.stations = 5;
     options.scanner.cols = 1500;
@@ -411,9 +415,9 @@ bool MainWindow::OpenDemoProject(const QString& dir) {
     Expected<io::Project> project = pipeline::WriteSimulatedProject(options, dir.toStdString(), sim, cancel);
     if (!project) return project.error();
     SubProgress load(progress, 0.7, 1.0);
-    return LoadJob(std::move(*project), load, cancel);
+    return LoadJob(std::move(*project), cells, load, cancel);
       },
-      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.scans)); });
+      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.previews)); });
 }
 
 bool MainWindow::RegisterProject() { return StartRegistration(tr("register the scans"), RegistrationOptions(), true); }
@@ -422,11 +426,11 @@ bool MainWindow::StartRegistration(const QString& text, pipeline::RegisterOption
   if (project().scans.empty()) return false;
   return jobs_->Start<Registered>(
       tr("Registering"),
-      [project = project(), scans = scans(), options, store_settings](
+      [project = project(), scans = doc_->FullScans(), options, store_settings](
           ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Registered> {
     if (store_settings) pipeline::StoreRegisterSettings(options, &project.settings);  // as the CLI saves them
     Expected<pipeline::ProjectRegistration> r =
-        pipeline::RegisterProjectScans(project, scans, options, progress, cancel);
+        pipeline::RegisterProjectScans(project, *scans, options, progress, cancel);
     if (!r) return r.error();
     return Registered{std::move(project), r->confusion};
       },
@@ -523,7 +527,7 @@ void MainWindow::OnJobFailed(const QString& title, const QString& message, bool 
 void MainWindow::Refresh() {
   const io::Project& p = project();
   const Eigen::MatrixXi& c = confusion();
-  scan_list_->Show(p, scans());
+  scan_list_->Show(p, previews());
   // The confusion matrix in scan order (root, then as the registration placed the scans), as in the
   // report; empty when there is none, so no stale matrix is shown.
   const std::vector<int> order = io::OrderedScanIndices(p);
@@ -544,7 +548,7 @@ void MainWindow::Refresh() {
   io::Project shown = p;
   if (!any_registered)
     for (io::ProjectScan& s : shown.scans) s.registered = true;
-  scene_->ShowScans(shown, scans());
+  scene_->ShowScans(shown, previews());
   UpdateTitle();
 }
 
@@ -622,19 +626,24 @@ void MainWindow::FillRecentMenu(QMenu* menu) {
 bool MainWindow::NewProject(const QStringList& scan_files, const QString& project_path) {
   std::vector<std::filesystem::path> files;
   for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start<pipeline::CreatedProject>(
+  return jobs_->Start<AddedScans>(
       tr("Creating %1").arg(project_path),
-      [files, path = project_path.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
+      [files, path = project_path.toStdString(), cells = doc_->previewCells()](ProgressSink& progress,
+                                                  const CancelToken& cancel) -> Expected<AddedScans> {
         pipeline::CreateProjectOptions options;
         options.scan_files = files;
-        options.keep_scans = true;
         options.skip_unreadable = true;  // one bad file does not stop the others
-        return pipeline::CreateProject(path, options, progress, cancel);
+        SubProgress create(progress, 0.0, 0.8);
+        Expected<pipeline::CreatedProject> created = pipeline::CreateProject(path, options, create, cancel);
+        if (!created) return created.error();
+        SubProgress previews(progress, 0.8, 1.0);  // read back from the scan cache the creation filled
+        Expected<LoadedProject> loaded = LoadJob(std::move(created->project), cells, previews, cancel);
+        if (!loaded) return loaded.error();
+        return AddedScans{std::move(loaded->project), std::move(loaded->previews), std::move(created->skipped)};
       },
-      [this](pipeline::CreatedProject& created) {
-        const std::vector<std::string> skipped = std::move(created.skipped);
-        OnProjectLoaded(std::move(created.project), std::move(created.scans));
-        ShowSkippedFiles(skipped);
+      [this](AddedScans& created) {
+        OnProjectLoaded(std::move(created.project), std::move(created.previews));
+        ShowSkippedFiles(created.skipped);
       });
 }
 
@@ -647,14 +656,26 @@ bool MainWindow::AddScans(const QStringList& scan_files) {
   for (const QString& f : scan_files) files.push_back(f.toStdString());
   return jobs_->Start<AddedScans>(
       tr("Adding scans"),
-      [files, project = project()](ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<AddedScans> {
+      [files, project = project(), cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<AddedScans> {
         std::vector<std::string> skipped;
-        Expected<std::vector<Scan>> scans = pipeline::AppendScanFiles(project, files, true, progress, cancel, &skipped);
-        if (!scans) return scans.error();
-        return AddedScans{std::move(project), std::move(*scans), std::move(skipped)};
+        const std::size_t before = project.scans.size();
+        SubProgress append(progress, 0.0, 0.8);
+        Expected<std::vector<Scan>> read = pipeline::AppendScanFiles(project, files, false, append, cancel, &skipped);
+        if (!read) return read.error();
+        std::vector<int> added;
+        for (std::size_t i = before; i < project.scans.size(); ++i) added.push_back(static_cast<int>(i));
+        std::vector<pipeline::ScanPreview> previews;
+        if (!added.empty()) {
+          SubProgress load(progress, 0.8, 1.0);  // read back from the scan cache the append filled
+          Expected<std::vector<pipeline::ScanPreview>> p = pipeline::LoadScanPreviews(
+              project, pipeline::PreviewCellsPerScan(project.scans.size(), cells), load, cancel, added);
+          if (!p) return p.error();
+          previews = std::move(*p);
+        }
+        return AddedScans{std::move(project), std::move(previews), std::move(skipped)};
       },
       [this](AddedScans& added) {
-        if (!added.scans.empty()) doc_->AppendScans(std::move(added.project), std::move(added.scans));
+        if (!added.previews.empty()) doc_->AppendScans(std::move(added.project), std::move(added.previews));
         ShowSkippedFiles(added.skipped);
       });
 }

@@ -14,6 +14,7 @@
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
+#include "core/pipeline/scan_previews.h"
 
 class QAction;
 class QMenu;
@@ -139,7 +140,8 @@ class MainWindow : public QMainWindow {
   View3d* view3d() const { return view3d_; }
   ProjectDocument* document() const { return doc_; }
   const io::Project& project() const;
-  const std::vector<Scan>& scans() const;
+  // What the views draw of each scan (the full points: document()->FullScans() / ReadScan()).
+  const std::vector<pipeline::ScanPreview>& previews() const;
   const Eigen::MatrixXi& confusion() const;
   QUndoStack* undoStack() const;
   bool dirty() const;
@@ -164,7 +166,7 @@ class MainWindow : public QMainWindow {
  private:
   void CreateMenus();
   void CreateDocks();
-  void OnProjectLoaded(io::Project project, std::vector<Scan> scans);  // opened, created or simulated
+  void OnProjectLoaded(io::Project project, std::vector<pipeline::ScanPreview> previews);  // opened, created or simulated
   void UpdateTitle();
   void ShowSkippedFiles(const std::vector<std::string>& skipped);  // batch add: the files left out, and why
   void ReportRegistration();  // the run's summary: log, and the status bar until the next job

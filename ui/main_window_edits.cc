@@ -2,6 +2,7 @@
 // aligning them by picked points or refining them from where they stand, parent overrides and link
 // decisions, registering only what is missing, and project management (remove, rename, relink, root).
 // Split from main_window.cc, which builds the window, its menus and the file actions.
+#include <QApplication>
 #include <QStatusBar>
 
 #include "core/common/log.h"
@@ -102,10 +103,15 @@ bool MainWindow::RefineScan(const QString& scan, const QString& parent) {
   }
   const int p = project().FindScan(parents.first().toStdString());
   return StartPairJob(tr("Refining %1 to %2").arg(scan, parents.first()),
-                      [parent = scans()[p], child = scans()[c], options = RegistrationOptions()](
-                          ProgressSink&, const CancelToken& cancel) {
-                        const Eigen::Isometry3d start = parent.world_from_scan.inverse() * child.world_from_scan;
-                        return pipeline::RefinePairFromPose(parent, child, start, options, 0.0, cancel);
+                      [scans = doc_->FullScans(), p, c, options = RegistrationOptions()](
+                          ProgressSink&, const CancelToken& cancel) -> Expected<io::LinkRecord> {
+                        auto parent = scans->Get(p);
+                        if (!parent) return parent.error();
+                        auto child = scans->Get(c);
+                        if (!child) return child.error();
+                        const Eigen::Isometry3d start =
+                            (*parent)->world_from_scan.inverse() * (*child)->world_from_scan;
+                        return pipeline::RefinePairFromPose(**parent, **child, start, options, 0.0, cancel);
                       });
 }
 
@@ -117,9 +123,12 @@ PickPointsDialog* MainWindow::PickPoints(const QString& child) {
                                                 : tr("Select the scan to align in the scan list first."));
     return nullptr;
   }
-  auto fetch = [this](const QString& name) -> const Scan* {
-    const int i = project().FindScan(name.toStdString());
-    return i >= 0 && i < static_cast<int>(scans().size()) ? &scans()[i] : nullptr;
+  // The full scans, read when the dialog shows them (cells are picked at full resolution).
+  auto fetch = [this](const QString& name) -> Expected<Scan> {
+    QApplication::setOverrideCursor(Qt::WaitCursor);
+    Expected<Scan> scan = doc_->ReadScan(project().FindScan(name.toStdString()));
+    QApplication::restoreOverrideCursor();
+    return scan;
   };
   auto* dialog = new PickPointsDialog(fetch, child, parents, this);
   dialog->setAttribute(Qt::WA_DeleteOnClose);
@@ -135,9 +144,13 @@ bool MainWindow::AlignFromPickedPoints(const QString& parent, const QString& chi
   const int p = project().FindScan(parent.toStdString()), c = project().FindScan(child.toStdString());
   if (p < 0 || c < 0) return false;
   return StartPairJob(tr("Aligning %1 to %2 by picked points").arg(child, parent),
-                      [parent = scans()[p], child = scans()[c], pairs = std::move(pairs), levelled,
-                       options = RegistrationOptions()](ProgressSink&, const CancelToken& cancel) {
-                        return pipeline::AlignFromPickedPoints(parent, child, pairs, levelled, options, cancel);
+                      [scans = doc_->FullScans(), p, c, pairs = std::move(pairs), levelled,
+                       options = RegistrationOptions()](ProgressSink&, const CancelToken& cancel) -> Expected<io::LinkRecord> {
+                        auto parent = scans->Get(p);
+                        if (!parent) return parent.error();
+                        auto child = scans->Get(c);
+                        if (!child) return child.error();
+                        return pipeline::AlignFromPickedPoints(**parent, **child, pairs, levelled, options, cancel);
                       });
 }
 
@@ -154,10 +167,10 @@ bool MainWindow::SetParentOverride(const QString& child, const QString& parent) 
   };
   return jobs_->Start<Overridden>(
       tr("Registering %1").arg(child),
-      [project = project(), scans = scans(), options = RegistrationOptions(), name = child.toStdString(), chosen](
+      [project = project(), scans = doc_->FullScans(), options = RegistrationOptions(), name = child.toStdString(), chosen](
           ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Overridden> {
         Expected<pipeline::OverrideOutcome> out =
-            pipeline::OverrideParent(project, scans, name, chosen, options, progress, cancel);
+            pipeline::OverrideParent(project, *scans, name, chosen, options, progress, cancel);
         if (!out) return out.error();
         return Overridden{std::move(project), std::move(*out)};
       },
@@ -285,15 +298,21 @@ bool MainWindow::RelinkScan(const QString& scan, const QString& file) {
   if (s < 0) return false;
   struct Relinked {
     io::Project project;
-    Scan scan;
+    pipeline::ScanPreview scan;
   };
+  // The grid the scan had, to check that the new file holds the same scan.
+  Scan current(scan.toStdString(), 0, 0);
+  current.rows = previews()[s].full_rows;
+  current.cols = previews()[s].full_cols;
   return jobs_->Start<Relinked>(
       tr("Relinking %1").arg(scan),
-      [project = project(), current = scans()[s], name = scan.toStdString(), path = file.toStdString()](
+      [project = project(), current = std::move(current), name = scan.toStdString(), path = file.toStdString(),
+       cells = pipeline::PreviewCellsPerScan(project().scans.size(), doc_->previewCells())](
           ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<Relinked> {
         Expected<Scan> read = pipeline::RelinkScan(project, name, path, &current, progress, cancel);
         if (!read) return read.error();
-        return Relinked{std::move(project), std::move(*read)};
+        return Relinked{std::move(project),
+                        pipeline::MakePreview(std::move(*read), cells)};
       },
       [this, scan, file](Relinked& r) {
         doc_->EditWithScan(tr("relink %1 to %2").arg(scan, file), std::move(r.project), std::move(r.scan));

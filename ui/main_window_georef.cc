@@ -1,6 +1,7 @@
 // The georeferencing parts of the main window (issue 15): importing control points, picking
 // targets in a scan's panorama, and placing the registered project on control without
 // registering it again.
+#include <QApplication>
 #include <QStatusBar>
 
 #include "core/common/log.h"
@@ -28,8 +29,15 @@ bool MainWindow::ImportControl(const QString& path) {
 
 PickTargetDialog* MainWindow::PickTarget(const QString& scan) {
   const int i = project().FindScan(scan.toStdString());
-  if (i < 0 || i >= static_cast<int>(scans().size())) {
+  if (i < 0) {
     ShowError(tr("Pick a target"), tr("Select a scan in the scan list first."));
+    return nullptr;
+  }
+  QApplication::setOverrideCursor(Qt::WaitCursor);
+  Expected<Scan> full = doc_->ReadScan(i);  // targets are picked on the full scan
+  QApplication::restoreOverrideCursor();
+  if (!full) {
+    ShowError(tr("Pick a target"), QString::fromStdString(full.error().message));
     return nullptr;
   }
   QStringList names;
@@ -37,7 +45,7 @@ PickTargetDialog* MainWindow::PickTarget(const QString& scan) {
   const pipeline::RegisterOptions options = RegistrationOptions();
   georef::CheckerTargetOptions checkers = options.checkers;
   if (checkers.size_m == 0) checkers.size_m = georef::CheckerTargetOptions().size_m;  // a pick may still be a board
-  auto* dialog = new PickTargetDialog(scans()[i], names, options.spheres, checkers, this);
+  auto* dialog = new PickTargetDialog(*full, names, options.spheres, checkers, this);
   dialog->setAttribute(Qt::WA_DeleteOnClose);
   connect(dialog, &QDialog::accepted, this, [this, dialog] {
     if (auto t = dialog->Target()) AddPickedTarget(*t);
@@ -67,9 +75,9 @@ bool MainWindow::Georeference() {
   }
   return jobs_->Start<io::Project>(
       tr("Georeferencing"),
-      [project = project(), scans = scans(), options = RegistrationOptions()](
+      [project = project(), scans = doc_->FullScans(), options = RegistrationOptions()](
           ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<io::Project> {
-        auto placed = pipeline::GeoreferenceProject(project, scans, options, progress, cancel);
+        auto placed = pipeline::GeoreferenceProject(project, *scans, options, progress, cancel);
         if (!placed) return placed.error();
         return project;
       },

@@ -16,6 +16,7 @@
 #include <QVBoxLayout>
 
 #include "core/pipeline/merge_scans.h"
+#include "core/pipeline/project_scans.h"
 #include "ui/app_settings.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
@@ -166,9 +167,14 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
 }
 
 void MergePanel::UpdateEstimate() {
+  // Counted on the previews, each standing for its scan (stride^2 points a preview point).
   std::vector<const Scan*> scans;
-  for (std::size_t i = 0; i < window_->scans().size() && i < window_->project().scans.size(); ++i)
-    if (window_->project().scans[i].registered) scans.push_back(&window_->scans()[i]);
+  std::vector<int> strides;
+  for (std::size_t i = 0; i < window_->previews().size() && i < window_->project().scans.size(); ++i) {
+    if (!window_->project().scans[i].registered) continue;
+    scans.push_back(&window_->previews()[i].scan);
+    strides.push_back(window_->previews()[i].stride);
+  }
   merge::MergeOptions options = Options();
   merge::MergeEstimate estimate;
   if (scans.empty() || !options.Validate()) {
@@ -178,13 +184,13 @@ void MergePanel::UpdateEstimate() {
   if (!voxel_chosen_) {  // a default that finishes in about a minute on this project
     merge::MergeOptions base = options;
     base.voxel_m = merge::MergeOptions().voxel_m;
-    options = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr);
+    options = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, strides);
     sizing_ = true;
     voxel_mm_->setValue(options.voxel_m * 1000.0);
     sizing_ = false;
     options = Options();
   }
-  if (Status fits = merge::CheckMergeFits(scans, options, &estimate); !fits) {
+  if (Status fits = merge::CheckMergeFits(scans, options, &estimate, strides); !fits) {
     estimate_->setText(QString::fromStdString(fits.error().message));
     estimate_->setStyleSheet("color: #b00000;");
     return;
@@ -235,10 +241,10 @@ bool MergePanel::Run() {
     return false;
   }
   SaveOptions();
-  std::vector<Scan> scans;  // the job's own copy of the registered scans
-  for (std::size_t i = 0; i < window_->scans().size() && i < window_->project().scans.size(); ++i)
-    if (window_->project().scans[i].registered) scans.push_back(window_->scans()[i]);
-  if (scans.empty()) {
+  std::vector<int> registered;  // read in full by the job
+  for (std::size_t i = 0; i < window_->project().scans.size(); ++i)
+    if (window_->project().scans[i].registered) registered.push_back(static_cast<int>(i));
+  if (registered.empty()) {
     ShowError(tr("Nothing to merge"),
               window_->project().scans.empty()
                   ? tr("No project is open. Open a project (File → Open project…), register it, then merge.")
@@ -248,8 +254,13 @@ bool MergePanel::Run() {
   }
   return window_->jobs()->Start<MergedMesh>(
       kMergeTitle,
-      [scans = std::move(scans), options](ProgressSink& progress, const CancelToken& cancel) -> Expected<MergedMesh> {
-        Expected<merge::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
+      [project = window_->project(), registered = std::move(registered), options](
+          ProgressSink& progress, const CancelToken& cancel) -> Expected<MergedMesh> {
+        SubProgress read(progress, 0.0, 0.1);
+        Expected<std::vector<Scan>> scans = pipeline::LoadProjectScans(project, read, cancel, registered);
+        if (!scans) return scans.error();
+        SubProgress merging(progress, 0.1, 1.0);
+        Expected<merge::MergeResult> r = pipeline::MergeScans(*scans, {}, options, merging, cancel);
         if (!r) return r.error();
         return MergedMesh{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
                           options.voxel_m, r->moving_points, options.remove_moving};

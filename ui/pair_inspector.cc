@@ -185,12 +185,15 @@ bool PairInspector::ShowScan(const QString& name) {
   panorama_->ShowMessage(tr("Computing the panorama of %1…").arg(name));
   StartOrQueue(&queued_scan_, [this, name] {
     const int i = window_->project().FindScan(name.toStdString());
-    if (i < 0 || i >= static_cast<int>(window_->scans().size())) return false;
-    // A copy for the worker: core data are never shared between threads.
+    if (i < 0) return false;
+    // The full scan, read by the worker (the window keeps previews only).
     return Start<PanoramaImage>(
         tr("Panorama of %1").arg(name),
-        [scan = window_->scans()[i], name, options = window_->RegistrationOptions()](
+        [scans = window_->document()->FullScans(), i, name, options = window_->RegistrationOptions()](
             ProgressSink& progress, const CancelToken& cancel) -> Expected<PanoramaImage> {
+          auto read = scans->Get(i);
+          if (!read) return read.error();
+          const Scan& scan = **read;
           progress.Report(0.1, "features of " + scan.name);
           Expected<ScanFeatures> features = Features(scan, options);
           if (!features) return features.error();
@@ -238,7 +241,7 @@ bool PairInspector::RunPair() {
   const QString parent = panel_->parentScan(), child = panel_->childScan();
   const int p = window_->project().FindScan(parent.toStdString());
   const int c = window_->project().FindScan(child.toStdString());
-  if (p < 0 || c < 0 || p == c || std::max(p, c) >= static_cast<int>(window_->scans().size())) {
+  if (p < 0 || c < 0 || p == c) {
     panel_->ShowMessage(tr("not run"), tr("choose two different scans of the project"));
     return false;
   }
@@ -248,7 +251,7 @@ bool PairInspector::RunPair() {
     // Looked up again: a queued request starts after another job, which may have changed the project.
     const int p = window_->project().FindScan(parent.toStdString());
     const int c = window_->project().FindScan(child.toStdString());
-    if (p < 0 || c < 0 || std::max(p, c) >= static_cast<int>(window_->scans().size())) {
+    if (p < 0 || c < 0) {
       panel_->SetRunning(false);
       panel_->ShowMessage(tr("not run"), tr("the scans are no longer in the project"));
       return false;
@@ -256,14 +259,16 @@ bool PairInspector::RunPair() {
     pipeline::RegisterOptions options = window_->RegistrationOptions();
     options.coarse.method = panel_->coarseMethod();
     options.fine = panel_->fineMethod();
-    const Scan& ps = window_->scans()[p];
-    const Scan& cs = window_->scans()[c];
-    const QString title =
-        tr("Pair registration %1 → %2").arg(QString::fromStdString(cs.name), QString::fromStdString(ps.name));
+    const QString title = tr("Pair registration %1 → %2").arg(child, parent);
     const bool started = Start<PairJobResult>(
         title,
-        [parent = ps, child = cs, options](ProgressSink& progress,
-                                           const CancelToken& cancel) -> Expected<PairJobResult> {
+        [scans = window_->document()->FullScans(), p, c, options](
+            ProgressSink& progress, const CancelToken& cancel) -> Expected<PairJobResult> {
+          auto parent_read = scans->Get(p);
+          if (!parent_read) return parent_read.error();
+          auto child_read = scans->Get(c);
+          if (!child_read) return child_read.error();
+          const Scan &parent = **parent_read, &child = **child_read;
           Expected<pipeline::PairInspection> r = pipeline::InspectPair(parent, child, options, {}, progress, cancel);
           if (!r) return r.error();
           PairJobResult out;

@@ -32,7 +32,11 @@ Eigen::Vector3d PointAt(const Scan& scan, int row, int col) { return scan.Point(
 
 PickPointsDialog::PickPointsDialog(FetchScan fetch, const QString& child, const QStringList& parents, QWidget* parent)
     : QDialog(parent), fetch_(std::move(fetch)), child_name_(child) {
-  if (const Scan* c = fetch_(child)) child_scan_ = *c;
+  if (Expected<Scan> c = fetch_(child)) {
+    child_scan_ = std::move(*c);
+  } else {
+    read_error_ = QString::fromStdString(c.error().message);
+  }
   setObjectName("PickPointsDialog");
   setWindowTitle(tr("Align %1 by picked points").arg(child));
   parent_box_ = new QComboBox(this);
@@ -122,7 +126,11 @@ const Scan* PickPointsDialog::FindScan(const QString& name) const {
 
 void PickPointsDialog::ShowScans() {
   parent_scan_.reset();
-  if (const Scan* p = fetch_(ParentScan())) parent_scan_ = *p;
+  if (Expected<Scan> p = fetch_(ParentScan())) {
+    parent_scan_ = std::move(*p);
+  } else {
+    read_error_ = QString::fromStdString(p.error().message);
+  }
   for (auto [scene, name] : {std::make_pair(parent_scene_, ParentScan()), std::make_pair(child_scene_, child_name_)}) {
     scene->clear();
     if (const Scan* s = FindScan(name)) scene->addPixmap(QPixmap::fromImage(PickingImage(*s)))->setZValue(-1);
@@ -212,7 +220,9 @@ void PickPointsDialog::Update() {
     table_->setItem(i, 2, new QTableWidgetItem(xyz(pts[i].child)));
     table_->setItem(i, 3, new QTableWidgetItem(fit ? tr("%1 mm").arg(1e3 * fit->residual_m[i], 0, 'f', 0) : "—"));
   }
-  if (pairs < need) {
+  if (!read_error_.isEmpty() && (!parent_scan_ || !child_scan_)) {
+    status_->setText(read_error_);
+  } else if (pairs < need) {
     status_->setText(tr("%n more pair(s) to pick.", "", need - pairs));
   } else if (!fit) {
     status_->setText(QString::fromStdString(fit.error().message));

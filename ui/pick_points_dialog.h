@@ -32,9 +32,10 @@ class PickPointsDialog : public QDialog {
 
  public:
   // child: the scan to align; parents: the registered scans it may be aligned to (first: the
-  // default). `fetch` gives a scan of the open project by name (null: gone); the dialog keeps a copy
-  // of the two scans it shows (it does not block the window), never the whole project.
-  using FetchScan = std::function<const Scan*(const QString& name)>;
+  // default). `fetch` reads a scan of the open project in full by name (an error: gone, or its file
+  // cannot be read; the dialog says so); the dialog keeps the two scans it shows (it does not block
+  // the window), never the whole project.
+  using FetchScan = std::function<Expected<Scan>(const QString& name)>;
   PickPointsDialog(FetchScan fetch, const QString& child, const QStringList& parents, QWidget* parent = nullptr);
 
   QString ParentScan() const;
@@ -61,6 +62,7 @@ class PickPointsDialog : public QDialog {
 
   FetchScan fetch_;
   std::optional<Scan> parent_scan_, child_scan_;
+  QString read_error_;  // why a scan shown could not be read
   QString child_name_;
   QComboBox* parent_box_ = nullptr;
   ZoomView* parent_view_ = nullptr;

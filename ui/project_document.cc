@@ -3,6 +3,8 @@
 #include <QUndoCommand>
 #include <QUndoStack>
 
+#include "core/pipeline/project_scans.h"
+
 namespace scanreg::ui {
 
 // One edit, undone by restoring the snapshot from before it (projects hold no points: cheap). An
@@ -59,10 +61,23 @@ void ProjectDocument::NotifyDirty() {
   emit DirtyChanged(was_dirty_);
 }
 
+std::shared_ptr<pipeline::ScanStore> ProjectDocument::FullScans() const {
+  // new, not make_shared: the store (a mutex) is built in place from ProjectScanStore's value.
+  return std::shared_ptr<pipeline::ScanStore>(
+      new pipeline::ScanStore(pipeline::ProjectScanStore(project_, pipeline::DefaultMemoryBudget())));
+}
+
+Expected<Scan> ProjectDocument::ReadScan(int i) const {
+  NullProgress quiet;
+  Expected<std::vector<Scan>> one = pipeline::LoadProjectScans(project_, quiet, CancelToken(), {i});
+  if (!one) return one.error();
+  return std::move(one->front());
+}
+
 void ProjectDocument::SyncPoses() {
-  for (std::size_t i = 0; i < scans_.size() && i < project_.scans.size(); ++i) {
-    scans_[i].world_from_scan = project_.scans[i].world_from_scan;
-    scans_[i].name = project_.scans[i].name;
+  for (std::size_t i = 0; i < previews_.size() && i < project_.scans.size(); ++i) {
+    previews_[i].scan.world_from_scan = project_.scans[i].world_from_scan;
+    previews_[i].scan.name = project_.scans[i].name;
   }
 }
 
@@ -70,16 +85,16 @@ void ProjectDocument::SyncScans(const io::Project& before) {
   bool same = before.scans.size() == project_.scans.size();
   for (std::size_t i = 0; same && i < project_.scans.size(); ++i) same = KeyOf(before.scans[i]) == KeyOf(project_.scans[i]);
   if (!same) {
-    for (std::size_t i = 0; i < scans_.size() && i < before.scans.size(); ++i)
-      set_aside_[KeyOf(before.scans[i])] = std::move(scans_[i]);
-    scans_.clear();
+    for (std::size_t i = 0; i < previews_.size() && i < before.scans.size(); ++i)
+      set_aside_[KeyOf(before.scans[i])] = std::move(previews_[i]);
+    previews_.clear();
     for (const io::ProjectScan& ps : project_.scans) {
       auto it = set_aside_.find(KeyOf(ps));
       if (it == set_aside_.end()) {  // cannot happen: every scan of an edit was read before
-        scans_.emplace_back(ps.name, 0, 0);
+        previews_.push_back(pipeline::ScanPreview{Scan(ps.name, 0, 0)});
         continue;
       }
-      scans_.push_back(std::move(it->second));
+      previews_.push_back(std::move(it->second));
       set_aside_.erase(it);
     }
   }
@@ -87,9 +102,9 @@ void ProjectDocument::SyncScans(const io::Project& before) {
   if (!same) emit ScansChanged();
 }
 
-void ProjectDocument::Open(io::Project project, std::vector<Scan> scans) {
+void ProjectDocument::Open(io::Project project, std::vector<pipeline::ScanPreview> previews) {
   project_ = std::move(project);
-  scans_ = std::move(scans);
+  previews_ = std::move(previews);
   set_aside_.clear();
   SyncPoses();
   const Eigen::MatrixXi* saved = project_.CurrentConfusion();  // from the last registration, if any
@@ -103,9 +118,9 @@ void ProjectDocument::Open(io::Project project, std::vector<Scan> scans) {
   NotifyDirty();
 }
 
-void ProjectDocument::AppendScans(io::Project project, std::vector<Scan> added) {
+void ProjectDocument::AppendScans(io::Project project, std::vector<pipeline::ScanPreview> added) {
   project_ = std::move(project);
-  for (Scan& s : added) scans_.push_back(std::move(s));
+  for (pipeline::ScanPreview& s : added) previews_.push_back(std::move(s));
   SyncPoses();
   confusion_.resize(0, 0);
   undo_->clear();
@@ -120,9 +135,9 @@ void ProjectDocument::Edit(const QString& text, io::Project after, bool rerun) {
   undo_->push(new SnapshotCommand(this, text, project_, std::move(after), confusion_, confusion_, rerun, false));
 }
 
-void ProjectDocument::EditWithScan(const QString& text, io::Project after, Scan scan) {
+void ProjectDocument::EditWithScan(const QString& text, io::Project after, pipeline::ScanPreview scan) {
   for (const io::ProjectScan& ps : after.scans)
-    if (ps.name == scan.name) set_aside_[KeyOf(ps)] = std::move(scan);
+    if (ps.name == scan.scan.name) set_aside_[KeyOf(ps)] = std::move(scan);
   Edit(text, std::move(after));
 }
 

@@ -43,7 +43,7 @@ ScanListPanel::ScanListPanel(QWidget* parent) : QTableWidget(parent) {
   });
 }
 
-void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& scans) {
+void ScanListPanel::Show(const io::Project& project, const std::vector<pipeline::ScanPreview>& scans) {
   const QSignalBlocker blocker(this);  // the check boxes are set, not changed by the user
   setRowCount(static_cast<int>(project.scans.size()));
   // Errors relative to the root, so that the datum of the registration does not matter.
@@ -51,14 +51,14 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<Scan>& sc
   const std::vector<bool> on_hand = io::RestsOnHandPlacement(project);
   for (int i = 0; i < rowCount(); ++i) {
     const io::ProjectScan& s = project.scans[i];
-    const Scan* scan = i < static_cast<int>(scans.size()) ? &scans[i] : nullptr;
+    const pipeline::ScanPreview* scan = i < static_cast<int>(scans.size()) ? &scans[i] : nullptr;
     QTableWidgetItem* name = Item(QString::fromStdString(s.name), Qt::AlignLeft | Qt::AlignVCenter);
     name->setFlags(name->flags() | Qt::ItemIsUserCheckable);
     name->setCheckState(hidden_.contains(name->text()) ? Qt::Unchecked : Qt::Checked);
     name->setToolTip(tr("Uncheck to hide the scan in the 3D view"));
     setItem(i, 0, name);
-    setItem(i, 1, Item(scan ? QString("%1 × %2").arg(scan->cols).arg(scan->rows) : "-"));
-    setItem(i, 2, Item(scan ? QString::number(scan->CountValid()) : "-"));
+    setItem(i, 1, Item(scan ? QString("%1 × %2").arg(scan->full_cols).arg(scan->full_rows) : "-"));
+    setItem(i, 2, Item(scan ? QString::number(scan->full_valid) : "-"));
     const io::PoseState state = io::ScanPoseState(s);
     QTableWidgetItem* status = Item(tr(io::PoseStateName(state)), Qt::AlignCenter);
     status->setForeground(state == io::PoseState::kUnregistered ? QColor(190, 60, 40)

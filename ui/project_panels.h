@@ -9,6 +9,7 @@
 
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
+#include "core/pipeline/scan_previews.h"
 
 namespace scanreg::ui {
 
@@ -19,7 +20,7 @@ class ScanListPanel : public QTableWidget {
 
  public:
   explicit ScanListPanel(QWidget* parent = nullptr);
-  void Show(const io::Project& project, const std::vector<Scan>& scans);
+  void Show(const io::Project& project, const std::vector<pipeline::ScanPreview>& scans);
 
  signals:
   void ScanVisibilityChanged(const QString& name, bool visible);

@@ -212,18 +212,18 @@ Eigen::Vector3d SceneOrigin(const io::Project& project) {
   return Eigen::Vector3d::Zero();
 }
 
-ScanActors MakeScanActors(const std::vector<Scan>& scans, const io::Project& project, CloudColouring colouring,
-                          std::size_t max_points_per_scan) {
+ScanActors MakeScanActors(const std::vector<pipeline::ScanPreview>& previews, const io::Project& project,
+                          CloudColouring colouring, std::size_t max_points_per_scan) {
   ScanActors actors;
   actors.clouds.resize(project.scans.size());
   actors.markers.resize(project.scans.size());
   const Eigen::Vector3d origin = SceneOrigin(project);
-  for (std::size_t i = 0; i < scans.size() && i < project.scans.size(); ++i) {
+  for (std::size_t i = 0; i < previews.size() && i < project.scans.size(); ++i) {
     if (!project.scans[i].registered) continue;
     const Eigen::Isometry3d& pose = project.scans[i].world_from_scan;
     double rgb[3];
     ScanColour(static_cast<int>(i), rgb);
-    actors.clouds[i] = MakeCloudActor(scans[i], pose, origin, colouring, rgb, max_points_per_scan);
+    actors.clouds[i] = MakeCloudActor(previews[i].scan, pose, origin, colouring, rgb, max_points_per_scan);
     actors.markers[i] = MakeMarkerActor(pose.translation() - origin, rgb);
   }
   actors.links = MakeLinksActor(project, origin);

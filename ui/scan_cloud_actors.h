@@ -13,6 +13,7 @@
 
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
+#include "core/pipeline/scan_previews.h"
 
 class vtkActor;
 
@@ -32,9 +33,10 @@ struct ScanActors {
 // coordinates keep their precision in VTK's float pipeline. Every actor of a scene uses it.
 Eigen::Vector3d SceneOrigin(const io::Project& project);
 
-// Draws the registered scans of `project` (scans[i] belongs to project.scans[i]).
-ScanActors MakeScanActors(const std::vector<Scan>& scans, const io::Project& project, CloudColouring colouring,
-                          std::size_t max_points_per_scan);
+// Draws the registered scans of `project` from their previews (previews[i] belongs to
+// project.scans[i]; max_points_per_scan 0: every point of the preview).
+ScanActors MakeScanActors(const std::vector<pipeline::ScanPreview>& previews, const io::Project& project,
+                          CloudColouring colouring, std::size_t max_points_per_scan);
 
 // A distinct colour per scan index (RGB in [0, 1]).
 void ScanColour(int index, double rgb[3]);

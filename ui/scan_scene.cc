@@ -42,7 +42,7 @@ void ScanScene::ScansReplaced(bool new_project) {
   new_project_ |= new_project;
 }
 
-void ScanScene::ShowScans(const io::Project& project, const std::vector<Scan>& scans) {
+void ScanScene::ShowScans(const io::Project& project, const std::vector<pipeline::ScanPreview>& scans) {
   // Nothing to redraw after a job that changed neither (an export, a merge): no GUI-thread stall;
   // unless another view (the pair overlay) has replaced the scene's actors meanwhile.
   if (!points_replaced_ && scans_ == &scans && SameDrawing(project, project_) && ViewShowsScene()) return;

@@ -31,7 +31,7 @@ class ScanScene : public QObject {
 
   ScanScene(View3d* view, QObject* parent);
 
-  void ShowScans(const io::Project& project, const std::vector<Scan>& scans);
+  void ShowScans(const io::Project& project, const std::vector<pipeline::ScanPreview>& scans);
   // The scans' points were replaced (scans added, or another project: then the camera frames it
   // again): the next ShowScans rebuilds the clouds.
   void ScansReplaced(bool new_project);
@@ -60,7 +60,7 @@ class ScanScene : public QObject {
 
   View3d* view_;
   io::Project project_;
-  const std::vector<Scan>* scans_ = nullptr;
+  const std::vector<pipeline::ScanPreview>* scans_ = nullptr;
   bool points_replaced_ = false;
   bool new_project_ = false;
   std::shared_ptr<const merge::Mesh> mesh_;

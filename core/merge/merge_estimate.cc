@@ -30,19 +30,21 @@ struct Count {
 };
 
 // Blocks counted at `voxel` for a merge at merge_voxel (equal, or finer when extrapolating).
-Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel, std::size_t cap,
-                  double merge_voxel) {
+Count CountBlocks(const std::vector<const Scan*>& scans, const std::vector<int>& strides, const MergeOptions& options,
+                  double voxel, std::size_t cap, double merge_voxel) {
   Count c;
   if (scans.empty()) return c;
   const Eigen::Vector3d origin = scans.front()->world_from_scan.translation();
   BlockCounter counter(voxel, options.band_m > 0.0 ? options.band_m : 3.0 * voxel, cap);
   const double max2 = options.max_range_m > 0.0 ? options.max_range_m * options.max_range_m : INFINITY;
-  for (const Scan* s : scans) {
-    c.cells += s->size();
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const Scan* s = scans[k];
+    const std::size_t weight = k < strides.size() ? std::size_t(strides[k]) * std::size_t(strides[k]) : 1;
+    c.cells += s->size() * weight;
     const Eigen::Isometry3d to_grid = Eigen::Translation3d(-origin) * s->world_from_scan;
     for (std::size_t i = 0; i < s->size(); ++i) {
       if (!s->valid[i] || s->points[i].squaredNorm() > max2) continue;
-      ++c.points;
+      c.points += weight;
       if (!c.capped && !counter.Add((to_grid * s->points[i].cast<double>()).cast<float>())) c.capped = true;
     }
   }
@@ -64,10 +66,10 @@ Count CountBlocks(const std::vector<const Scan*>& scans, const MergeOptions& opt
   return c;
 }
 
-MergeEstimate Estimate(const std::vector<const Scan*>& scans, const MergeOptions& options, double voxel,
-                       std::size_t cap) {
+MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<int>& strides,
+                       const MergeOptions& options, double voxel, std::size_t cap) {
   MergeEstimate e;
-  Count c = CountBlocks(scans, options, voxel, cap, voxel);
+  Count c = CountBlocks(scans, strides, options, voxel, cap, voxel);
   e.points = c.points;
   e.blocks = c.blocks;
   // Past the cap: count at coarser voxels until the count fits, once more at twice that voxel, and
@@ -76,11 +78,11 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const MergeOptions
   double coarse = voxel;
   while (c.capped && coarse < 1e4) {
     coarse *= 2.0;
-    c = CountBlocks(scans, options, coarse, cap, voxel);
+    c = CountBlocks(scans, strides, options, coarse, cap, voxel);
     e.extrapolated = true;
   }
   if (e.extrapolated) {
-    const Count coarser = CountBlocks(scans, options, 2.0 * coarse, cap, voxel);
+    const Count coarser = CountBlocks(scans, strides, options, 2.0 * coarse, cap, voxel);
     const double k = coarser.blocks > 0 ? std::clamp(std::log2(double(c.blocks) / double(coarser.blocks)), 1.0, 3.0) : 2.0;
     e.blocks = static_cast<std::size_t>(std::min(1e18, double(c.blocks) * std::pow(coarse / voxel, k)));
   }
@@ -122,8 +124,8 @@ std::string MergeEstimate::Describe() const {
 }
 
 MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,
-                            std::size_t cap_blocks) {
-  return Estimate(scans, options, options.voxel_m, cap_blocks);
+                            std::size_t cap_blocks, const std::vector<int>& strides) {
+  return Estimate(scans, strides, options, options.voxel_m, cap_blocks);
 }
 
 std::size_t DefaultMemoryBudget() {
@@ -132,20 +134,21 @@ std::size_t DefaultMemoryBudget() {
   return static_cast<std::size_t>(0.75 * double(pages) * double(page));
 }
 
-Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate) {
+Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate,
+                      const std::vector<int>& strides) {
   const std::size_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes : DefaultMemoryBudget();
   // The cap keeps the count's own key set small (~50 bytes a key) and quick: past it the count is
   // extrapolated from a coarser voxel (which errs on the large side: the band does not shrink with
   // the surface's square).
   const std::size_t cap = std::clamp<std::size_t>(budget / sizeof(SparseGrid::Block) + 1, 1000, 500'000);
-  *estimate = Estimate(scans, options, options.voxel_m, cap);
+  *estimate = Estimate(scans, strides, options, options.voxel_m, cap);
   if (estimate->bytes <= budget) return Status::Ok();
   // The smallest voxel that fits: blocks shrink with the voxel's square on surfaces; a few steps.
   double voxel = options.voxel_m;
   MergeEstimate fit = *estimate;
   for (int i = 0; i < 8 && fit.bytes > budget; ++i) {
     voxel *= std::max(1.05, std::sqrt(double(fit.bytes) / (0.9 * double(budget))));
-    fit = Estimate(scans, options, voxel, cap);
+    fit = Estimate(scans, strides, options, voxel, cap);
   }
   char voxels[80];
   std::snprintf(voxels, sizeof voxels, "merge: at a voxel of %.4g m the merge needs ", options.voxel_m);

@@ -25,14 +25,17 @@ struct MergeEstimate {
 };
 
 // cap_blocks: stop counting there (the estimate is then extrapolated from a coarser voxel).
+// strides: the scans are previews (pipeline::ScanPreview) — every strides[i]-th row and column of
+// the scan that will be merged — so scan i's points count strides[i]^2 times (empty: all 1).
 MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,
-                            std::size_t cap_blocks = 50'000'000);
+                            std::size_t cap_blocks = 50'000'000, const std::vector<int>& strides = {});
 
 // Three quarters of this machine's physical memory.
 std::size_t DefaultMemoryBudget();
 
 // Ok when the estimate fits options.memory_budget_bytes (0: DefaultMemoryBudget()); else an error
 // with the estimate, the budget and the smallest voxel (and the largest maximum range) that fit.
-Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate);
+Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate,
+                      const std::vector<int>& strides = {});
 
 }  // namespace scanreg::merge

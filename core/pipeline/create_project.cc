@@ -11,7 +11,9 @@
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
 #include "core/io/ptx.h"
+#include "core/io/scan_cache.h"
 #include "core/io/scan_file.h"
+#include "core/pipeline/project_scans.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::pipeline {
@@ -130,7 +132,9 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
       return e;
     }
     SubProgress sub(progress, double(f) / scan_files.size(), double(f + 1) / scan_files.size());
-    Expected<std::vector<Scan>> scans = io::ReadScanFile(path, sub, cancel);
+    // Through the project's binary scan cache: the first read stores the scans there, so that
+    // opening or registering the project later reads them back instead of parsing the file again.
+    Expected<std::vector<Scan>> scans = io::ReadScanFileCached(path, ProjectCacheDir(project), sub, cancel);
     if (!scans) {
       if (refuse(scans.error())) continue;
       return scans.error();

@@ -103,16 +103,17 @@ Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
 }
 
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
-                               MergeEstimate* estimate) {
+                               MergeEstimate* estimate, const std::vector<int>& strides) {
   MergeEstimate e;
   if (!scans.empty()) {
     const ProjectScale scale = MeasureProjectScale(scans);
-    const double from_data = std::max(scale.extent_m / 1000.0, scale.spacing_m);
+    const int finest = strides.empty() ? 1 : std::max(1, *std::min_element(strides.begin(), strides.end()));
+    const double from_data = std::max(scale.extent_m / 1000.0, scale.spacing_m / finest);
     if (from_data > 0) options.voxel_m = std::clamp(from_data, 1e-3, std::max(1e-3, options.voxel_m));
     const std::size_t budget =
         options.memory_budget_bytes > 0 ? options.memory_budget_bytes : merge::DefaultMemoryBudget();
     for (int doubling = 0; doubling < 12; ++doubling) {
-      e = merge::EstimateMerge(scans, options);
+      e = merge::EstimateMerge(scans, options, 50'000'000, strides);
       if (e.seconds <= max_seconds && e.bytes <= budget / 2) break;
       options.voxel_m *= 2.0;
     }

@@ -32,8 +32,9 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 // data's scale — a thousandth of the scans' median extent, at least their point spacing, between
 // 1 mm and options.voxel_m — and doubles until the estimate (merge_estimate.h) takes at most
 // max_seconds and half the memory budget. *estimate: the estimate of the options returned.
+// strides: the scans are previews (merge::EstimateMerge); the point spacing is the finest scan's.
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
-                               MergeEstimate* estimate);
+                               MergeEstimate* estimate, const std::vector<int>& strides = {});
 
 // Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic.
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);

@@ -137,7 +137,7 @@ Status ReleaseHandPlacement(const std::string& scan, io::Project& project) {
   return Status::Ok();
 }
 
-Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector<Scan>& scans,
+Expected<OverrideOutcome> OverrideParent(io::Project& project, ScanStore& scans,
                                          const std::string& child, const std::optional<std::string>& parent,
                                          RegisterOptions options, ProgressSink& progress, const CancelToken& cancel) {
   const int c = project.FindScan(child);

@@ -14,6 +14,7 @@
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
+#include "core/pipeline/scan_store.h"
 
 namespace scanreg::pipeline {
 
@@ -55,14 +56,14 @@ Status SetRoot(const std::string& scan, io::Project& project);
 // re-registering only the child and the scans registered through it; every other scan keeps its
 // pose and link. When the forced link fails and the child had a link before, the project is left
 // as it was — the old link stays and the override is not kept — and the outcome says why.
-// `scans`: the project's scans (points), in project order. Errors: unknown scans, the root given a
+// `scans`: the project's scans (points), in project order (a store: read on demand). Errors: unknown scans, the root given a
 // parent, the registration's errors (cancel, invalid options).
 struct OverrideOutcome {
   bool applied = false;  // false: the old link stays
   std::string message;   // what happened, for the log and a dialog
   Eigen::MatrixXi confusion;
 };
-Expected<OverrideOutcome> OverrideParent(io::Project& project, const std::vector<Scan>& scans,
+Expected<OverrideOutcome> OverrideParent(io::Project& project, ScanStore& scans,
                                          const std::string& child, const std::optional<std::string>& parent,
                                          RegisterOptions options, ProgressSink& progress, const CancelToken& cancel);
 

@@ -12,6 +12,7 @@
 #include "core/pipeline/manual_alignment.h"
 #include "core/pipeline/project_edits.h"
 #include "core/pipeline/register_project.h"
+#include "core/pipeline/scan_store.h"
 #include "core/simulate/project_sim.h"
 
 namespace scanreg::pipeline {
@@ -269,7 +270,8 @@ TEST_F(UserDecisions, OnlyTheUnregisteredScansArePlaced) {
 // the scan and the scans under it.
 TEST_F(UserDecisions, AFailingOverrideKeepsTheOldLinkAndAWorkingOneMovesOnlyTheSubtree) {
   io::Project project = *registered_;
-  const std::vector<Scan> scans = ScansAt(project);
+  const std::vector<Scan> at = ScansAt(project);
+  ScanStore scans(at);
   const io::Project before = project;
   NullProgress progress;
   // Evidence no pair of these stations can give (95 % overlap): the forced link s04 -> s02 fails.

@@ -23,6 +23,7 @@
 #include "ui/main_window.h"
 #include "ui/network_panel.h"
 #include "ui/pick_target_dialog.h"
+#include "ui/project_document.h"
 #include "ui/scan_cloud_actors.h"
 
 using scanreg::test::WaitForJob;
@@ -97,7 +98,7 @@ class ControlPanelTest : public QObject {
     scanreg::io::Project drawn = window.project();
     for (auto& s : drawn.scans) s.registered = true;
     const scanreg::ui::ScanActors actors =
-        scanreg::ui::MakeScanActors(window.scans(), drawn, scanreg::ui::CloudColouring::kPerScan, 1000);
+        scanreg::ui::MakeScanActors(window.previews(), drawn, scanreg::ui::CloudColouring::kPerScan, 1000);
     QVERIFY(actors.targets != nullptr);
     auto* poly = vtkPolyData::SafeDownCast(actors.targets->GetMapper()->GetInput());
     QVERIFY(poly != nullptr);
@@ -157,7 +158,9 @@ class ControlPanelTest : public QObject {
     const scanreg::io::ProjectScan& s01 = window.project().scans[0];
     QVERIFY(s01.reference_world_from_scan.has_value());
     const Eigen::Isometry3d scan_from_world = s01.reference_world_from_scan->inverse();
-    const scanreg::Scan& scan = window.scans()[0];
+    const scanreg::Expected<scanreg::Scan> full = window.document()->ReadScan(0);  // targets are picked in full
+    QVERIFY(full.ok());
+    const scanreg::Scan& scan = *full;
     auto pixel_of = [&](const Eigen::Vector3d& p) {
       const double az = std::atan2(p.y(), p.x()), el = std::asin(p.z() / p.norm());
       const double col = (az + M_PI) / (2 * M_PI / sim.scanner.cols) - 0.5;

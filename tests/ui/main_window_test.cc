@@ -19,14 +19,18 @@
 #include "core/io/project_lock.h"
 #include "core/io/project_tree.h"
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_scans.h"
+#include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
 #include "tests/ui/wait_for_job.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/network_panel.h"
 #include "ui/pose_dialog.h"
+#include "ui/project_document.h"
 #include "ui/project_panels.h"
 #include "ui/register_settings_dialog.h"
+#include "ui/scan_scene.h"
 #include "ui/view_3d.h"
 
 using scanreg::test::WaitForJob;
@@ -222,6 +226,57 @@ class MainWindowTest : public QObject {
     QVERIFY(window.SaveProject(path));  // what was reloaded saves again
   }
 
+  // Issue 13: the window keeps previews of the scans (within a global cell budget), shows the full
+  // scans' grids and counts, and registers from the full scans read from their files — the same
+  // poses as the core registration of the full scans.
+  void ALargeProjectIsDrawnFromPreviewsAndRegisteredFromItsFiles() {
+    QTemporaryDir dir;
+    scanreg::SimulatedProjectOptions sim;
+    sim.stations = 3;
+    sim.scanner.cols = 600;
+    sim.scanner.rows = 150;
+    scanreg::NullProgress progress;
+    const scanreg::Expected<scanreg::io::Project> written = scanreg::pipeline::WriteSimulatedProject(
+        sim, dir.filePath("p").toStdString(), progress, scanreg::CancelToken());
+    QVERIFY(written.ok());
+    const scanreg::Expected<std::vector<scanreg::Scan>> full =
+        scanreg::pipeline::LoadProjectScans(*written, progress, scanreg::CancelToken());
+    QVERIFY(full.ok());
+
+    MainWindow window;
+    window.show();
+    window.document()->SetPreviewCells(60'000);  // 20 000 a scan: every third row and column
+    QVERIFY(window.OpenProject(QString::fromStdString(written->file.string())));
+    QVERIFY(WaitForJob(window, 120000));
+    QCOMPARE(static_cast<int>(window.previews().size()), 3);
+    for (int i = 0; i < 3; ++i) {
+      const scanreg::pipeline::ScanPreview& p = window.previews()[i];
+      QCOMPARE(p.stride, 3);
+      QVERIFY(p.scan.size() <= 20'000u);
+      QCOMPARE(window.scanList()->item(i, 1)->text(), QString("600 × 150"));
+      QCOMPARE(window.scanList()->item(i, 2)->text(), QString::number((*full)[i].CountValid()));
+    }
+    window.scene()->SetFullResolution(true);  // every point of the previews, never the full scans
+    std::size_t preview_points = 0;
+    for (const auto& p : window.previews()) preview_points += p.scan.CountValid();
+    QCOMPARE(window.scene()->DrawnPoints(), preview_points);
+
+    scanreg::io::Project expected = window.project();
+    const scanreg::Expected<scanreg::pipeline::ProjectRegistration> core = scanreg::pipeline::RegisterProjectScans(
+        expected, *full, window.RegistrationOptions(), progress, scanreg::CancelToken());
+    QVERIFY(core.ok());
+    QVERIFY(window.RegisterProject());
+    QVERIFY(WaitForJob(window, 300000));
+    int registered = 0;
+    for (int i = 0; i < 3; ++i) {
+      const scanreg::io::ProjectScan &got = window.project().scans[i], &want = expected.scans[i];
+      QCOMPARE(got.registered, want.registered);
+      registered += got.registered;
+      QVERIFY2(got.world_from_scan.isApprox(want.world_from_scan, 1e-9), got.name.c_str());
+    }
+    QCOMPARE(registered, 3);
+  }
+
   void DemoProjectLoadsRegistersCancelsAndSaves() {
     MainWindow window;
     window.show();
@@ -230,7 +285,7 @@ class MainWindowTest : public QObject {
     QVERIFY(window.OpenDemoProject(dir.filePath("demo")));
     QVERIFY(!window.OpenDemoProject(dir.filePath("other")));  // one job at a time
     QVERIFY(WaitForJob(window, 300000));
-    QCOMPARE(static_cast<int>(window.scans().size()), 5);
+    QCOMPARE(static_cast<int>(window.previews().size()), 5);
     QCOMPARE(window.scanList()->rowCount(), 5);
     QVERIFY(window.view3d()->PropCount() > 0);
 

@@ -17,6 +17,7 @@
 #include "ui/pair_inspector.h"
 #include "ui/pair_panel.h"
 #include "ui/pick_points_dialog.h"
+#include "ui/project_document.h"
 
 using scanreg::test::WaitForJob;
 using scanreg::ui::MainWindow;
@@ -96,7 +97,9 @@ class ManualAlignmentTest : public QObject {
     QVERIFY(dialog != nullptr);
     QCOMPARE(dialog->ParentScan(), QString("s01"));
     QVERIFY(!dialog->alignButton()->isEnabled());
-    const auto clicks = ClicksFor(window.scans()[0], window.scans()[1], truth1.inverse() * truth2, 4);
+    const scanreg::Expected<scanreg::Scan> full1 = window.document()->ReadScan(0), full2 = window.document()->ReadScan(1);
+    QVERIFY(full1.ok() && full2.ok());
+    const auto clicks = ClicksFor(*full1, *full2, truth1.inverse() * truth2, 4);
     QCOMPARE(static_cast<int>(clicks.size()), 4);
     for (const auto& [in_parent, in_child] : clicks) {
       QVERIFY(dialog->Pick(true, QPointF(in_parent.col + 0.5, in_parent.row + 0.5)));

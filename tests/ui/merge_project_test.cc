@@ -341,7 +341,7 @@ class MergeProjectTest : public QObject {
     QVERIFY(window.NewProject({demo + "/s01.ptx", demo + "/s02.ptx"}, path));
     QVERIFY(WaitForJob(window, 120000));
     QCOMPARE(static_cast<int>(window.project().scans.size()), 2);
-    QCOMPARE(static_cast<int>(window.scans().size()), 2);
+    QCOMPARE(static_cast<int>(window.previews().size()), 2);
     QVERIFY(QFile::exists(path));
     QVERIFY(!window.dirty());
 
@@ -351,8 +351,8 @@ class MergeProjectTest : public QObject {
     QStringList names;
     for (const auto& s : window.project().scans) names << QString::fromStdString(s.name);
     QCOMPARE(names, QStringList({"s01", "s02", "s03"}));
-    QCOMPARE(QString::fromStdString(window.scans()[2].name), QString("s03"));
-    QVERIFY(window.scans()[2].CountValid() > 0);
+    QCOMPARE(QString::fromStdString(window.previews()[2].scan.name), QString("s03"));
+    QVERIFY(window.previews()[2].full_valid > 0);
     QCOMPARE(window.scanList()->rowCount(), 3);
     QVERIFY(window.dirty());
     auto* twice = window.findChild<QMessageBox*>("ErrorDialog");
@@ -416,8 +416,8 @@ class MergeProjectTest : public QObject {
     QVERIFY(window.OpenProject(registered_));
     QVERIFY(WaitForJob(window, 120000));
     std::size_t valid = 0;
-    for (std::size_t i = 0; i < window.scans().size(); ++i)
-      if (window.project().scans[i].registered) valid += window.scans()[i].CountValid();
+    for (std::size_t i = 0; i < window.previews().size(); ++i)
+      if (window.project().scans[i].registered) valid += window.previews()[i].scan.CountValid();
     QCOMPARE(window.scene()->decimatedPoints(), scanreg::ui::ScanScene::kDecimatedPoints);
     // A budget of a fifth of the points stands for a project of millions.
     const std::size_t budget = valid / 5;

@@ -25,6 +25,7 @@
 #include "ui/pair_inspector.h"
 #include "ui/pair_panel.h"
 #include "ui/panorama_view.h"
+#include "ui/project_document.h"
 #include "ui/project_panels.h"
 #include "ui/view_3d.h"
 
@@ -103,7 +104,9 @@ class PairInspectorTest : public QObject {
 
   void SelectingAScanShowsItsPanoramaWithItsKeypoints() {
     const int row = 1;
-    const scanreg::Scan& scan = window_->scans()[row];
+    const scanreg::Expected<scanreg::Scan> full = window_->document()->ReadScan(row);
+    QVERIFY(full.ok());
+    const scanreg::Scan& scan = *full;
     ClickCell(window_->scanList(), row, 0);
     QVERIFY(WaitForJob(*window_, 120000));
     scanreg::ui::PanoramaView* view = window_->pairInspector()->panoramaView();
@@ -298,7 +301,7 @@ class PairInspectorTest : public QObject {
     // A scan whose panorama has not been computed yet (s02 and the pair's scans have been).
     QString other;
     for (const auto& s : window_->project().scans)
-      if (s.name != link_.parent && s.name != link_.child && s.name != window_->scans()[1].name) other = s.name.c_str();
+      if (s.name != link_.parent && s.name != link_.child && s.name != window_->project().scans[1].name) other = s.name.c_str();
     QVERIFY(window_->pairInspector()->ShowScan(other));
     QVERIFY(window_->jobs()->busy());
     scanreg::ui::PairPanel* panel = window_->pairInspector()->pairPanel();

@@ -25,9 +25,9 @@ Project TwoScans() {
   return p;
 }
 
-std::vector<Scan> Points(int n) {
-  std::vector<Scan> scans;
-  for (int i = 0; i < n; ++i) scans.emplace_back("s" + std::to_string(i), 2, 2);
+std::vector<scanreg::pipeline::ScanPreview> Points(int n) {
+  std::vector<scanreg::pipeline::ScanPreview> scans;
+  for (int i = 0; i < n; ++i) scans.push_back(scanreg::pipeline::MakePreview(Scan("s" + std::to_string(i), 2, 2), 4));
   return scans;
 }
 
@@ -47,10 +47,10 @@ class ProjectDocumentTest : public QObject {
     doc.Edit("move b", moved);
     QVERIFY(doc.dirty());
     // The scans' poses follow the project's (stored once, synced by the document).
-    QCOMPARE(doc.scans()[1].world_from_scan.translation().x(), 1.0);
+    QCOMPARE(doc.previews()[1].scan.world_from_scan.translation().x(), 1.0);
     doc.undoStack()->undo();
     QVERIFY(!doc.dirty());
-    QCOMPARE(doc.scans()[1].world_from_scan.translation().x(), 0.0);
+    QCOMPARE(doc.previews()[1].scan.world_from_scan.translation().x(), 0.0);
     QCOMPARE(dirty.count(), 2);
     doc.undoStack()->redo();
     doc.MarkSaved("/tmp/doc.scanreg.json", 42);
@@ -97,7 +97,7 @@ class ProjectDocumentTest : public QObject {
     three.scans.push_back(c);
     doc.AppendScans(three, Points(1));
     QCOMPARE(added.count(), 1);
-    QCOMPARE(int(doc.scans().size()), 3);
+    QCOMPARE(int(doc.previews().size()), 3);
     QVERIFY(!doc.undoStack()->canUndo());  // snapshots with fewer scans no longer apply
     QVERIFY(doc.dirty());
     doc.MarkSaved("/tmp/doc.scanreg.json", 7);

@@ -44,7 +44,7 @@ class ProjectManagementTest : public QObject {
                              QString::fromStdString(written->scans[0].path.string())}));
     QVERIFY(WaitForJob(window, 120000));
     QCOMPARE(static_cast<int>(window.project().scans.size()), 3);
-    QCOMPARE(static_cast<int>(window.scans().size()), 3);
+    QCOMPARE(static_cast<int>(window.previews().size()), 3);
     QCOMPARE(QString::fromStdString(window.project().scans[2].name), QString("extra"));
     auto* box = window.findChild<QMessageBox*>("ErrorDialog");
     QVERIFY(box != nullptr);
@@ -55,12 +55,12 @@ class ProjectManagementTest : public QObject {
     // Rename, remove, root: each undoable; the removed scan's points come back with undo.
     QVERIFY(window.RenameScan("s02", "north"));
     QVERIFY(!window.RenameScan("s01", "north"));  // names stay unique (a dialog says so)
-    QCOMPARE(QString::fromStdString(window.scans()[1].name), QString("north"));
+    QCOMPARE(QString::fromStdString(window.previews()[1].scan.name), QString("north"));
     QVERIFY(window.RemoveScan("extra"));
-    QCOMPARE(static_cast<int>(window.scans().size()), 2);
+    QCOMPARE(static_cast<int>(window.previews().size()), 2);
     window.undoStack()->undo();
-    QCOMPARE(static_cast<int>(window.scans().size()), 3);
-    QCOMPARE(window.scans()[2].CountValid(), window.scans()[1].CountValid());
+    QCOMPARE(static_cast<int>(window.previews().size()), 3);
+    QCOMPARE(window.previews()[2].full_valid, window.previews()[1].full_valid);
     window.undoStack()->redo();
     QCOMPARE(static_cast<int>(window.project().scans.size()), 2);
     QVERIFY(window.SetRoot("north"));
@@ -77,7 +77,7 @@ class ProjectManagementTest : public QObject {
     QVERIFY(window.OpenProject(path, QString::fromStdString(second.string())));
     QVERIFY(WaitForJob(window, 120000));
     QVERIFY(window.dirty());
-    QCOMPARE(static_cast<int>(window.scans().size()), 2);
+    QCOMPARE(static_cast<int>(window.previews().size()), 2);
     QVERIFY(window.SaveProject(path));
 
     auto reopened = scanreg::io::LoadProject(path.toStdString());
