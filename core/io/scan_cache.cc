@@ -1,8 +1,10 @@
 #include "core/io/scan_cache.h"
 
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 
 #include "core/common/atomic_file.h"
 #include "core/common/hash.h"
@@ -66,6 +68,43 @@ Expected<std::uint64_t> SourceFileKey(const std::filesystem::path& file) {
   }
   if (in.bad()) return MakeError(ErrorCode::kIoError, "reading '" + file.string() + "' failed");
   return h.Digest();
+}
+
+Expected<std::uint64_t> MemoisedSourceFileKey(const std::filesystem::path& file,
+                                              const std::filesystem::path& cache_dir) {
+  std::error_code ec;
+  const std::string path = std::filesystem::absolute(file).lexically_normal().string();
+  const auto size = std::filesystem::file_size(file, ec);
+  const auto time = std::filesystem::last_write_time(file, ec);
+  if (ec || cache_dir.empty() || path.find('\n') != std::string::npos) return SourceFileKey(file);
+  const long long mtime = static_cast<long long>(time.time_since_epoch().count());
+  char stat[64];
+  std::snprintf(stat, sizeof stat, " %llu %lld ", static_cast<unsigned long long>(size), mtime);
+  const std::filesystem::path memo = cache_dir / "source-keys";
+  // Lines "<16 hex key> <size> <mtime> <path>"; the last line for a path wins.
+  std::optional<std::uint64_t> known;
+  std::ifstream in(memo);
+  for (std::string line; std::getline(in, line);) {
+    if (line.size() < 17 || line.compare(16, std::string::npos, std::string(stat) + path) != 0) continue;
+    unsigned long long key = 0;
+    if (std::sscanf(line.c_str(), "%16llx", &key) == 1) known = key;
+  }
+  if (known) return *known;
+  Expected<std::uint64_t> key = SourceFileKey(file);
+  if (!key) return key;
+  const auto age = std::filesystem::file_time_type::clock::now() - time;
+  if (age > std::chrono::seconds(2)) {
+    std::filesystem::create_directories(cache_dir, ec);
+    char hex[20];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(*key));
+    // One short line appended at once: concurrent writers (pair jobs) do not interleave.
+    if (std::FILE* out = std::fopen(memo.c_str(), "a")) {
+      const std::string line = hex + std::string(stat) + path + "\n";
+      std::fwrite(line.data(), 1, line.size(), out);
+      std::fclose(out);
+    }
+  }
+  return key;
 }
 
 namespace {
@@ -168,7 +207,7 @@ Expected<std::vector<Scan>> ReadScanFileCached(const std::filesystem::path& file
                                                const CancelToken& cancel, bool* from_cache) {
   if (from_cache) *from_cache = false;
   if (cache_dir.empty()) return ReadScanFile(file, progress, cancel);
-  Expected<std::uint64_t> key = SourceFileKey(file);
+  Expected<std::uint64_t> key = MemoisedSourceFileKey(file, cache_dir);
   if (!key) return ReadScanFile(file, progress, cancel);  // the reader names the problem
   const std::filesystem::path entry = ScanCachePath(cache_dir, file, *key);
   std::error_code ec;

@@ -28,6 +28,11 @@ namespace scanreg::io {
 
 // The key of a source file: a hash of its bytes (read once, ~1 GB/s from the page cache).
 Expected<std::uint64_t> SourceFileKey(const std::filesystem::path& file);
+// SourceFileKey memoised in cache_dir/source-keys by the file's path, size and modification time,
+// so that reopening a project does not read every source file again: a file changed since has
+// another size or time and is hashed again. A file modified within the last 2 seconds is not
+// memoised (a second write within the file system's time resolution would go unseen).
+Expected<std::uint64_t> MemoisedSourceFileKey(const std::filesystem::path& file, const std::filesystem::path& cache_dir);
 std::filesystem::path ScanCachePath(const std::filesystem::path& cache_dir, const std::filesystem::path& file,
                                     std::uint64_t key);
 

@@ -35,9 +35,10 @@ ScanPreview MakePreview(Scan scan, std::size_t max_cells);
 // Cells one preview may hold in a project of `scans` scans (`total` shared, at least 10 000).
 std::size_t PreviewCellsPerScan(std::size_t scans, std::size_t total = kPreviewCells);
 
-// Reads the project's scans one at a time (LoadProjectScans, from the binary scan cache when it
-// holds the file) and keeps each one's preview, max_cells_per_scan at most: at most one full scan
-// is in memory at once (a multi-scan file's scans: that file's). which: only these scans (by
+// The project's previews, max_cells_per_scan cells at most each: from the preview cache beside
+// the binary scan cache (keyed by the source file's content, the scan and the budget; a corrupt
+// entry is made again with a warning), else read in full one at a time (LoadProjectScans: at most
+// one file's scans in memory at once) and stored there. which: only these scans (by
 // index, in this order); empty: all. Errors as LoadProjectScans's (naming the scan and its file).
 Expected<std::vector<ScanPreview>> LoadScanPreviews(const io::Project& project, std::size_t max_cells_per_scan,
                                                     ProgressSink& progress, const CancelToken& cancel,

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 
 #include "core/io/ptx.h"
@@ -104,6 +105,38 @@ TEST_F(CacheFixture, AChangedSourceFileIsReadAgain) {
   EXPECT_FLOAT_EQ(changed[0].Point(0, 1).x(), 4.5f);
   EXPECT_FALSE(std::filesystem::exists(old_entry)) << "the superseded entry is removed: one entry per file";
   EXPECT_TRUE(std::filesystem::exists(ScanCachePath(cache, ptx, SourceFileKey(ptx).value())));
+}
+
+// Reopening a project does not hash every source file again: the key is memoised by the file's
+// size and time, and a changed file is hashed again.
+TEST_F(CacheFixture, ASourceKeyIsMemoisedUntilTheFileChanges) {
+  const auto memo_lines = [&] {
+    std::ifstream in(cache / "source-keys");
+    int n = 0;
+    for (std::string line; std::getline(in, line);) n += line.find(ptx.filename().string()) != std::string::npos;
+    return n;
+  };
+  const auto now = std::filesystem::file_time_type::clock::now();
+  Write(0);
+  std::filesystem::last_write_time(ptx, now - std::chrono::hours(1));
+  const Expected<std::uint64_t> first = MemoisedSourceFileKey(ptx, cache);
+  ASSERT_TRUE(first.ok());
+  EXPECT_EQ(*first, SourceFileKey(ptx).value());
+  EXPECT_EQ(memo_lines(), 1);
+  EXPECT_EQ(MemoisedSourceFileKey(ptx, cache).value(), *first);  // from the memo
+  EXPECT_EQ(memo_lines(), 1);
+
+  Write(0.5f);  // other points, another time
+  std::filesystem::last_write_time(ptx, now - std::chrono::minutes(30));
+  const Expected<std::uint64_t> second = MemoisedSourceFileKey(ptx, cache);
+  ASSERT_TRUE(second.ok());
+  EXPECT_NE(*second, *first);
+  EXPECT_EQ(*second, SourceFileKey(ptx).value());
+  EXPECT_EQ(memo_lines(), 2);
+
+  Write(1.0f);  // just written: hashed, not memoised (its time may not yet tell a later write)
+  EXPECT_EQ(MemoisedSourceFileKey(ptx, cache).value(), SourceFileKey(ptx).value());
+  EXPECT_EQ(memo_lines(), 2);
 }
 
 }  // namespace

@@ -103,6 +103,31 @@ TEST(ScanPreviews, AProjectsPreviewsAreReadFromItsFilesNamedAndPosed) {
   EXPECT_EQ((*some)[0].scan.name, project->scans[2].name);
   EXPECT_EQ((*some)[1].scan.name, project->scans[0].name);
 
+  // Read again: from the preview cache beside the scan cache, the same previews.
+  int entries = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir / ".scanreg-cache"))
+    entries += e.path().filename().string().rfind("preview_", 0) == 0;
+  EXPECT_EQ(entries, 3);
+  Expected<std::vector<ScanPreview>> again = LoadScanPreviews(*project, 10'000, progress, CancelToken());
+  ASSERT_TRUE(again.ok());
+  for (std::size_t i = 0; i < 3; ++i) {
+    const ScanPreview &a = (*previews)[i], &b = (*again)[i];
+    EXPECT_EQ(b.stride, a.stride);
+    EXPECT_EQ(b.full_valid, a.full_valid);
+    EXPECT_EQ(b.full_rows, a.full_rows);
+    EXPECT_EQ(b.scan.points, a.scan.points);
+    EXPECT_EQ(b.scan.valid, a.scan.valid);
+    EXPECT_TRUE(b.scan.world_from_scan.isApprox(project->scans[i].world_from_scan));
+  }
+  // A corrupt preview entry is made again from the scan.
+  for (const auto& e : std::filesystem::directory_iterator(dir / ".scanreg-cache")) {
+    if (e.path().filename().string().rfind("preview_", 0) != 0) continue;
+    std::filesystem::resize_file(e.path(), std::filesystem::file_size(e.path()) / 2);
+  }
+  Expected<std::vector<ScanPreview>> rebuilt = LoadScanPreviews(*project, 10'000, progress, CancelToken());
+  ASSERT_TRUE(rebuilt.ok());
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ((*rebuilt)[i].scan.points, (*previews)[i].scan.points);
+
   // A missing file: the error names the scan and the file.
   std::filesystem::remove(project->scans[1].path);
   Expected<std::vector<ScanPreview>> missing = LoadScanPreviews(*project, 10'000, progress, CancelToken());
