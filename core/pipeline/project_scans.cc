@@ -1,6 +1,7 @@
 #include "core/pipeline/project_scans.h"
 
 #include <map>
+#include <utility>
 
 #include "core/io/scan_cache.h"
 #include "core/io/scan_file.h"
@@ -16,6 +17,11 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
   if (which.empty())
     for (std::size_t i = 0; i < project.scans.size(); ++i) which.push_back(static_cast<int>(i));
   std::map<std::filesystem::path, std::vector<Scan>> files;
+  // How often each (file, scan in file) is asked for: its last use takes the scan instead of a copy.
+  std::map<std::pair<std::filesystem::path, int>, int> uses;
+  for (int i : which)
+    if (i >= 0 && i < static_cast<int>(project.scans.size()))
+      ++uses[{project.scans[i].path, project.scans[i].index_in_file}];
   std::vector<Scan> scans;
   scans.reserve(which.size());
   for (std::size_t k = 0; k < which.size(); ++k) {
@@ -43,7 +49,8 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
                            std::to_string(it->second.size()) + " scan(s), not scan number " +
                            std::to_string(ps.index_in_file + 1) + "; re-create the project from the file");
     }
-    Scan scan = it->second[ps.index_in_file];  // copy: a file's scans may be used once each
+    Scan& in_file = it->second[ps.index_in_file];
+    Scan scan = --uses[{ps.path, ps.index_in_file}] == 0 ? std::move(in_file) : in_file;
     scan.name = ps.name;
     scan.world_from_scan = ps.world_from_scan;
     scan.reference_world_from_scan = ps.reference_world_from_scan;

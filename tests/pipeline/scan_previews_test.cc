@@ -128,6 +128,14 @@ TEST(ScanPreviews, AProjectsPreviewsAreReadFromItsFilesNamedAndPosed) {
   ASSERT_TRUE(rebuilt.ok());
   for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ((*rebuilt)[i].scan.points, (*previews)[i].scan.points);
 
+  // A scan asked for twice comes back whole both times (its last use takes it, the first a copy).
+  Expected<std::vector<Scan>> twice = LoadProjectScans(*project, progress, CancelToken(), {1, 0, 1});
+  ASSERT_TRUE(twice.ok());
+  ASSERT_EQ(twice->size(), 3u);
+  EXPECT_EQ((*twice)[0].points, (*full)[1].points);
+  EXPECT_EQ((*twice)[2].points, (*full)[1].points);
+  EXPECT_EQ((*twice)[1].points, (*full)[0].points);
+
   // A missing file: the error names the scan and the file.
   std::filesystem::remove(project->scans[1].path);
   Expected<std::vector<ScanPreview>> missing = LoadScanPreviews(*project, 10'000, progress, CancelToken());
