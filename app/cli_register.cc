@@ -252,6 +252,9 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"candidates", true, false,
         "K        match each scan's features with its K best-voted scans, its capture-order neighbour "
         "and the user's pairs only (default 10; 0: every pair)"},
+       {"global-partners", true, false,
+        "K        the global step refines each scan's K largest overlaps at the registered poses besides "
+        "the tree's links: faster on big projects, less accurate (default 0: every overlapping pair)"},
        {"plan", true, false,
         "DIR      prepare the features and candidate pairs, write DIR/plan.json with one job per pair "
         "(run each with scanreg-cli pair-job DIR K, e.g. as a Slurm array), and stop"},

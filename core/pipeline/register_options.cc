@@ -63,6 +63,8 @@ RegisterOptions::RegisterOptions() {
 }
 
 Status RegisterOptions::Validate() const {
+  if (global_partners < 0)
+    return MakeError(ErrorCode::kInvalidArgument, "global partners must be >= 0 (0: every overlapping pair)");
   if (candidates < 0)
     return MakeError(ErrorCode::kInvalidArgument, "candidate partners per scan must be 0 (every pair) or more");
   if (Status s = spheres.Validate(); !s) return s;

@@ -349,6 +349,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     return r;
   };
   source.extra_overlap = options.thresholds.weak_overlap;  // as RegisterFromCurrentPoses
+  source.extra_per_scan = options.global_partners;
   source.min_check_weight = options.min_check_matches;
   source.position_partners = 3;
   source.clusters = true;

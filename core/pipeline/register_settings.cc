@@ -77,6 +77,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.control_tolerance_m", "control-tolerance", "control residual tolerance (m)", {}},
       {"register.levelled_deg", "levelled", "levelled scans: accuracy (°; 0: not levelled)", {}},
       {"register.candidates", "candidates", "partners matched per scan (0: every pair)", {}},
+      {"register.global_partners", "global-partners", "overlap partners per scan in the global step (0: every overlapping pair)", {}},
   };
   return all;
 }
@@ -96,6 +97,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.control_tolerance_m") return Number(o.georef.tolerance_m);
   if (key == "register.levelled_deg") return Number(o.georef.levelled_sigma_rad * 180.0 / M_PI);
   if (key == "register.candidates") return std::to_string(o.candidates);
+  if (key == "register.global_partners") return std::to_string(o.global_partners);
   return "";
 }
 
@@ -143,6 +145,13 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
     if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
     if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: every pair)");
     o->candidates = static_cast<int>(k);
+    return Status::Ok();
+  }
+  if (key == "register.global_partners") {
+    double k = 0;
+    if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
+    if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: every overlapping pair)");
+    o->global_partners = static_cast<int>(k);
     return Status::Ok();
   }
   return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");

@@ -379,6 +379,26 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
         if (Contains(excluded, i, j)) continue;
         extra.push_back(overlap(i, j) >= overlap(j, i) ? std::make_pair(i, j) : std::make_pair(j, i));
       }
+    if (source.extra_per_scan > 0) {  // each scan's largest overlaps; the graph needs a few, not all
+      auto larger = [&](const std::pair<int, int>& e) { return std::max(overlap(e.first, e.second), overlap(e.second, e.first)); };
+      std::vector<std::vector<int>> of_scan(n);  // indices into extra
+      for (std::size_t k = 0; k < extra.size(); ++k) {
+        of_scan[extra[k].first].push_back(static_cast<int>(k));
+        of_scan[extra[k].second].push_back(static_cast<int>(k));
+      }
+      std::vector<bool> keep(extra.size(), false);
+      for (std::vector<int>& ks : of_scan) {
+        std::stable_sort(ks.begin(), ks.end(), [&](int a, int b) { return larger(extra[a]) > larger(extra[b]); });
+        for (std::size_t r = 0; r < ks.size() && r < static_cast<std::size_t>(source.extra_per_scan); ++r) keep[ks[r]] = true;
+      }
+      std::vector<std::pair<int, int>> kept;
+      for (std::size_t k = 0; k < extra.size(); ++k)
+        if (keep[k]) kept.push_back(extra[k]);
+      if (kept.size() < extra.size())
+        LogInfo("global step: " + std::to_string(kept.size()) + " of " + std::to_string(extra.size()) +
+                " more overlapping pairs (each scan's " + std::to_string(source.extra_per_scan) + " largest overlaps)");
+      extra = std::move(kept);
+    }
     if (cancel.IsCancelled()) return Cancelled();
     std::vector<PairResult> refined(at_poses ? extra.size() : 0);
     if (at_poses) {  // independent refinements from the registered poses, concurrently

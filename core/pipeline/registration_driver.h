@@ -37,6 +37,9 @@ struct LinkSource {
   // overlap's scan as the parent.
   Eigen::MatrixXd overlap;
   double extra_overlap = 0.0;
+  // At most this many of those extra links per scan, its largest overlaps (a pair stays when either
+  // of its scans ranks it so high); 0: every one.
+  int extra_per_scan = 0;
   // Without `overlap` (links from feature matches): the overlap at the registered poses, computed once
   // the tree has placed the scans (placed[i]: scan i is registered), and the refinement of a pair
   // from those poses (parent_from_child). Every other pair overlapping by extra_overlap is refined

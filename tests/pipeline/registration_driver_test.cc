@@ -82,12 +82,12 @@ struct ScriptedProject {
     return source;
   }
 
-  Expected<ProjectRegistration> Drive(const LinkSource& source, bool check_every_link = false) {
+  Expected<ProjectRegistration> Drive(const LinkSource& source, bool check_every_link = false, bool global = false) {
     ScanOrderChoices choices;
     choices.root = 0;
     choices.overrides.assign(scans.size(), std::nullopt);
     RegisterOptions options;
-    options.global = false;
+    options.global = global;
     options.verify_all_links = check_every_link;
     options.loop_tolerance_m = 0.01;
     NullProgress progress;
@@ -164,6 +164,51 @@ TEST(RegistrationDriver, PositionPartnersAreBoundedAndTheirFailuresAreTheReason)
 // A link that needs a loop (a plan-view pose) is confirmed only by a loop through itself: not by
 // a loop of the scans placed through it (measured on the simulated city: a street placed on the
 // parallel street 66 m away, "confirmed" by a check between two of its own scans).
+// Issue 13: the global step refines each scan's largest overlaps at the registered poses, not every
+// overlapping pair (each costs a dense ICP); 0 refines them all.
+TEST(RegistrationDriver, TheGlobalStepRefinesEachScansLargestOverlapsOnly) {
+  auto run = [](int per_scan, std::set<std::pair<int, int>>* refined) {
+    ScriptedProject p({0, 5, 10, 15, 20, 25, 30, 35, 40});  // every pair within 25 m overlaps
+    LinkSource source = p.Source({{0, 1}, {1, 2}, {2, 3}, {3, 4}, {4, 5}, {5, 6}, {6, 7}, {7, 8}}, 0);
+    const auto truth = p.truth;
+    source.overlap_at = [truth](const std::vector<Eigen::Isometry3d>&, const std::vector<bool>&) {
+      const int n = static_cast<int>(truth.size());
+      Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);  // the nearer, the more
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+          if (i != j) overlap(i, j) = std::max(0.0, 1.0 - (truth[i].translation() - truth[j].translation()).norm() / 25.0);
+      return overlap;
+    };
+    std::mutex mutex;
+    source.refine_pair = [&](int parent, int child, const Eigen::Isometry3d&) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        refined->emplace(std::min(parent, child), std::max(parent, child));
+      }
+      return p.Register(parent, child);
+    };
+    source.extra_overlap = 0.1;
+    source.extra_per_scan = per_scan;
+    Expected<ProjectRegistration> r = p.Drive(source, false, true);
+    EXPECT_TRUE(r.ok());
+    if (!r.ok()) return;
+    for (int i = 0; i < 9; ++i) EXPECT_LT(p.Error(*r, i), 1e-6) << i;
+  };
+  std::set<std::pair<int, int>> all, two;
+  run(0, &all);
+  run(2, &two);
+  auto farthest = [](const std::set<std::pair<int, int>>& pairs) {
+    int d = 0;
+    for (const auto& [a, b] : pairs) d = std::max(d, b - a);
+    return d;
+  };
+  EXPECT_EQ(farthest(all), 4);  // 20 m apart: overlap 0.2
+  EXPECT_LE(two.size(), 2u * 9u);
+  EXPECT_LT(two.size(), all.size());
+  EXPECT_LE(farthest(two), 3) << "only the largest overlaps";
+  for (const auto& e : two) EXPECT_TRUE(all.count(e)) << e.first << "-" << e.second;
+}
+
 TEST(RegistrationDriver, ALinkThatNeedsALoopIsNotConfirmedByItsOwnSubtree) {
   ScriptedProject p({0, 10, 20, 30, 40});
   p.reach = 25.0;
