@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   qtbase5-dev libvtk9-qt-dev libpcl-dev libopencv-dev libeigen3-dev
-  libgtest-dev nlohmann-json3-dev libceres-dev libpugixml-dev
+  libgtest-dev nlohmann-json3-dev libceres-dev libpugixml-dev libnanoflann-dev
   xvfb xauth libgl1-mesa-dri
 )
 

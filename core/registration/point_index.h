@@ -1,5 +1,5 @@
-// Nearest-neighbour index over a fixed 3D point set (a k-d tree; PCL's FLANN tree kept private so
-// that callers do not pay PCL's compile time). Queries are const and thread-safe.
+// Nearest-neighbour index over a fixed 3D point set: a k-d tree (nanoflann, Debian's libnanoflann-dev)
+// over a float copy of the points. Queries are const and thread-safe.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -16,6 +16,8 @@ class PointIndex {
   PointIndex& operator=(const PointIndex&) = delete;
 
   std::size_t size() const { return size_; }
+  // Memory held, bytes (about 28 per point).
+  std::size_t Bytes() const;
   // Index of the nearest point within max_distance_m (-1 if none); squared distance in *d2.
   int Nearest(const Eigen::Vector3d& query, double max_distance_m, double* d2 = nullptr) const;
   // Indices of the k nearest points (fewer if the set is smaller), nearest first.
