@@ -176,14 +176,16 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
   if (json) {
     nlohmann::json out = ToJson(*result, scans, errors);
     out["memory"] = {{"budget_bytes", store.budget_bytes()},
-                     {"peak_scan_bytes", store.peak_bytes()},
-                     {"scan_reads", store.reads()}};
+                     {"peak_bytes", store.peak_bytes()},
+                     {"scan_reads", store.reads()},
+                     {"surface_builds", store.surface_builds()}};
     if (!project.control.empty()) out["georef"] = GeorefJson(project, *result);
     std::printf("%s\n", out.dump(2).c_str());
   } else {
     PrintText(*result, scans, errors);
-    std::printf("scans: read %d times for %zu scans, at most %s held (memory budget %s)\n", store.reads(),
-                scans.size(), pipeline::FormatBytes(store.peak_bytes()).c_str(),
+    std::printf("scans: read %d times for %zu scans, dense-ICP surfaces built %d times, at most %s of both held "
+                "(memory budget %s)\n",
+                store.reads(), scans.size(), store.surface_builds(), pipeline::FormatBytes(store.peak_bytes()).c_str(),
                 pipeline::FormatBytes(store.budget_bytes()).c_str());
     PrintGeoref(project, *result);
   }

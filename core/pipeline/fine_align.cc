@@ -32,9 +32,10 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
       return MakeError(ErrorCode::kInvalidArgument,
                        "fine method 'keypoints' needs feature matches; use em, projective-icp or dense");
     case FineMethod::kDense: {
+      const std::shared_ptr<const IcpSurface> surface = parent.Surface();
       Expected<IcpResult> icp =
-          parent.surface ? DenseIcpSurface(*parent.surface, child.Samples(), initial, options.dense_icp, quiet, cancel)
-                         : DenseIcpSamples(parent.Samples(), child.Samples(), initial, options.dense_icp, quiet, cancel);
+          surface ? DenseIcpSurface(*surface, child.samples, initial, options.dense_icp, quiet, cancel)
+                  : DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
       if (!icp) return icp.error();
       out.parent_from_child = icp->parent_from_child;
       out.iterations = icp->iterations;

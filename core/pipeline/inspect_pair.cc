@@ -83,12 +83,12 @@ Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, cons
     const Eigen::Isometry3d& pfc = out.result.link.parent_from_child;
     const double max_d = options.overlap_distance_m;
     std::vector<Eigen::Vector3d> child_surface;
-    child_surface.reserve(prepared[1].Samples().size());
-    for (const Eigen::Vector3d& p : prepared[1].Samples()) child_surface.push_back(pfc * p);
+    child_surface.reserve(prepared[1].samples.size());
+    for (const Eigen::Vector3d& p : prepared[1].samples) child_surface.push_back(pfc * p);
     Overlay(OverlayPoints(parent, Eigen::Isometry3d::Identity(), inspect.overlay_points), child_surface, max_d,
             &out.parent_points, &out.parent_distance_m);
     if (cancel.IsCancelled()) return Cancelled();
-    Overlay(OverlayPoints(child, pfc, inspect.overlay_points), prepared[0].Samples(), max_d, &out.child_points,
+    Overlay(OverlayPoints(child, pfc, inspect.overlay_points), prepared[0].samples, max_d, &out.child_points,
             &out.child_distance_m);
   }
   out.parent_features = std::move(prepared[0].features);

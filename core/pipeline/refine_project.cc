@@ -72,7 +72,8 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
     HoldScan(scans[i], &prepared[i]);
     prepared[i].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
-    index[i] = std::make_unique<PointIndex>(prepared[i].Samples());
+    prepared[i].surface_options = options.dense_icp;
+    index[i] = std::make_unique<PointIndex>(prepared[i].samples);
   }
   result.seconds_features = Since(t_start);
   const auto t_overlap = std::chrono::steady_clock::now();
@@ -82,7 +83,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     for (int j = 0; j < n; ++j) {
       if (i == j) continue;
       const Eigen::Isometry3d rel = scans[i].world_from_scan.inverse() * scans[j].world_from_scan;
-      overlap(i, j) = SampleOverlap(*index[i], prepared[j].Samples(), rel, options.overlap_distance_m);
+      overlap(i, j) = SampleOverlap(*index[i], prepared[j].samples, rel, options.overlap_distance_m);
       result.confusion(i, j) = static_cast<int>(std::lround(1000 * overlap(i, j)));
     }
   result.seconds_matching = Since(t_overlap);

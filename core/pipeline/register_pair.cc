@@ -97,10 +97,20 @@ Expected<std::shared_ptr<const Scan>> PreparedScan::Full() const {
   return full;
 }
 
+std::shared_ptr<const IcpSurface> PreparedScan::Surface() const {
+  if (samples.empty()) return nullptr;
+  const auto build = [this] { return std::make_shared<const IcpSurface>(samples, surface_options); };
+  if (store) return store->Surface(index, build);
+  if (!memo) return build();
+  std::call_once(memo->once, [&] { memo->surface = build(); });
+  return memo->surface;
+}
+
 void HoldScan(const Scan& scan, PreparedScan* prepared) {
   prepared->name = scan.name;
   prepared->scan = &scan;
   prepared->angular_step = AngularStep(scan);
+  prepared->memo = std::make_shared<PreparedScan::SurfaceMemo>();
 }
 
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
@@ -113,12 +123,8 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
     prepared->keypoint_points.push_back(p ? *p : Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   }
   prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
+  prepared->surface_options = options.dense_icp;
   prepared->plan = MakePlanView(prepared->geometric);
-  prepared->surface.reset();
-  if (options.fine == FineMethod::kDense && !prepared->samples.empty()) {  // the samples move into the surface
-    prepared->surface = std::make_shared<IcpSurface>(std::move(prepared->samples), options.dense_icp);
-    prepared->samples.clear();
-  }
 }
 
 int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const std::vector<GeometricMatch>& geometric,
@@ -150,15 +156,14 @@ int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m) {
   AlignmentEvidence e;
-  const std::vector<Eigen::Vector3d>& parent_pts = parent.Samples();
-  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.Samples(), 8000);
+  const std::vector<Eigen::Vector3d>& parent_pts = parent.samples;
+  const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.samples, 8000);
   if (parent_pts.size() < 8 || child_pts.empty()) return e;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(child_pts.size());
   for (const Eigen::Vector3d& c : child_pts) queries.push_back(parent_from_child * c);
-  const std::vector<double> d =
-      parent.surface ? PointToSurfaceDistances(*parent.surface->index, parent_pts, queries, max_distance_m)
-                     : PointToSurfaceDistances(PointIndex(parent_pts), parent_pts, queries, max_distance_m);
+  const std::shared_ptr<const IcpSurface> surface = parent.Surface();
+  const std::vector<double> d = PointToSurfaceDistances(*surface->index, parent_pts, queries, max_distance_m);
   double sum_sq = 0.0;
   long overlapping = 0;
   for (double di : d) {

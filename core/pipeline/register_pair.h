@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -36,17 +37,24 @@ struct PreparedScan {
   double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
-  // Valid points voxel-downsampled at the dense ICP voxel (read them with Samples()): here, or moved
-  // into `surface`, the samples prepared as a dense ICP parent (fine = dense).
+  // Valid points voxel-downsampled at the dense ICP voxel.
   std::vector<Eigen::Vector3d> samples;
-  std::shared_ptr<const IcpSurface> surface;
-  const std::vector<Eigen::Vector3d>& Samples() const { return surface ? surface->points : samples; }
+  DenseIcpOptions surface_options;  // how Surface() prepares them (normals)
+  // The samples prepared as a dense ICP parent and for point-to-surface distances (k-d tree and
+  // normals, ~75 bytes a sample): built when first asked for, then kept by the store under its
+  // memory budget, or else for the life of this scan (HoldScan). Null without samples.
+  std::shared_ptr<const IcpSurface> Surface() const;
+  struct SurfaceMemo {
+    std::once_flag once;
+    std::shared_ptr<const IcpSurface> surface;
+  };
+  std::shared_ptr<SurfaceMemo> memo;  // set by HoldScan
 
   // The full scan; an error when the store cannot read it again.
   Expected<std::shared_ptr<const Scan>> Full() const;
 };
 
-// Sets name, scan and angular step from a scan the caller keeps.
+// Sets name, scan and angular step from a scan the caller keeps (and forgets any surface).
 void HoldScan(const Scan& scan, PreparedScan* prepared);
 
 // Features are detected by the caller; this holds the scan (HoldScan) and fills the keypoints' 3D

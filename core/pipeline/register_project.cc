@@ -314,32 +314,26 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
   };
   // The pairs overlapping at the registered poses (whether matched or not) become links of the global
   // step, refined from those poses: bounding spheres first, then SampleOverlap on the voxel samples
-  // within 3 overlap distances (the samples are a voxel of one overlap distance apart).
-  std::vector<std::unique_ptr<PointIndex>> sample_index(n);
-  const auto index_of = [&](int i) -> const PointIndex& {
-    return prepared[i].surface ? *prepared[i].surface->index : *sample_index[i];
-  };
+  // within 3 overlap distances (the samples are a voxel of one overlap distance apart). One parent at
+  // a time: its k-d tree is built, used for every near child, and dropped (not all n at once).
   const double reach = 3.0 * options.overlap_distance_m;
   source.overlap_at = [&](const std::vector<Eigen::Isometry3d>& world, const std::vector<bool>& placed) {
     Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);
     std::vector<double> radius(n, 0.0);
     for (int i = 0; i < n; ++i)
-      for (const Eigen::Vector3d& p : prepared[i].Samples()) radius[i] = std::max(radius[i], p.norm());
+      for (const Eigen::Vector3d& p : prepared[i].samples) radius[i] = std::max(radius[i], p.norm());
+    const auto near = [&](int i, int j) {
+      return i != j && placed[i] && placed[j] &&
+             (world[i].translation() - world[j].translation()).norm() < radius[i] + radius[j];
+    };
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int i = 0; i < n; ++i)  // the dense ICP surface's index when there is one (the same samples)
-      if (placed[i] && !prepared[i].surface && !sample_index[i])
-        sample_index[i] = std::make_unique<PointIndex>(prepared[i].Samples());
-    std::vector<std::pair<int, int>> near;
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j)
-        if (placed[i] && placed[j] && (world[i].translation() - world[j].translation()).norm() < radius[i] + radius[j])
-          near.emplace_back(i, j);
-#pragma omp parallel for schedule(dynamic, 8)
-    for (long k = 0; k < static_cast<long>(near.size()); ++k) {
-      const auto [i, j] = near[k];
-      const Eigen::Isometry3d i_from_j = world[i].inverse() * world[j];
-      overlap(i, j) = SampleOverlap(index_of(i), prepared[j].Samples(), i_from_j, reach);
-      overlap(j, i) = SampleOverlap(index_of(j), prepared[i].Samples(), i_from_j.inverse(), reach);
+    for (int i = 0; i < n; ++i) {
+      bool any = false;
+      for (int j = 0; j < n && !any; ++j) any = near(i, j);
+      if (!any) continue;
+      const PointIndex index(prepared[i].samples);
+      for (int j = 0; j < n; ++j)
+        if (near(i, j)) overlap(i, j) = SampleOverlap(index, prepared[j].samples, world[i].inverse() * world[j], reach);
     }
     return overlap;
   };

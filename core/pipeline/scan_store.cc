@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -65,48 +66,75 @@ Scan ScanHead(const Scan& scan) {
 
 ScanStore::ScanStore(std::vector<Scan> heads, Reader read, std::size_t budget_bytes)
     : heads_(std::move(heads)), read_(std::move(read)), budget_(budget_bytes) {
-  resident_.resize(heads_.size());
-  bytes_.assign(heads_.size(), 0);
-  for (std::size_t i = 0; i < heads_.size(); ++i) reading_.push_back(std::make_unique<std::mutex>());
+  resident_.resize(2 * heads_.size());
+  bytes_.assign(2 * heads_.size(), 0);
+  for (std::size_t i = 0; i < 2 * heads_.size(); ++i) making_.push_back(std::make_unique<std::mutex>());
 }
 
-ScanStore::ScanStore(const std::vector<Scan>& scans) : caller_(&scans) {
+ScanStore::ScanStore(const std::vector<Scan>& scans)
+    : ScanStore(std::vector<Scan>(), nullptr, std::numeric_limits<std::size_t>::max()) {
+  caller_ = &scans;
   for (const Scan& s : scans) heads_.push_back(ScanHead(s));
+  resident_.resize(2 * heads_.size());
+  bytes_.assign(2 * heads_.size(), 0);
+  for (std::size_t i = 0; i < 2 * heads_.size(); ++i) making_.push_back(std::make_unique<std::mutex>());
+}
+
+Expected<std::shared_ptr<const void>> ScanStore::Hold(int slot, const std::function<Expected<Made>()>& make) {
+  std::lock_guard<std::mutex> one_maker(*making_[slot]);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (resident_[slot]) {
+      recent_.remove(slot);
+      recent_.push_front(slot);
+      return resident_[slot];
+    }
+  }
+  Expected<Made> made = make();  // outside the store's lock: other slots are served meanwhile
+  if (!made) return made.error();
+  std::lock_guard<std::mutex> lock(mutex_);
+  (slot < size() ? reads_ : builds_) += 1;
+  resident_[slot] = made->value;
+  bytes_[slot] = made->bytes;
+  held_ += made->bytes;
+  recent_.push_front(slot);
+  Trim();
+  peak_ = std::max(peak_, held_);
+  return made->value;
 }
 
 Expected<std::shared_ptr<const Scan>> ScanStore::Get(int index) {
   if (index < 0 || index >= size())
     return MakeError(ErrorCode::kInvalidArgument, "scan number " + std::to_string(index) + " is not in the project");
   if (caller_) return std::shared_ptr<const Scan>(std::shared_ptr<const Scan>(), &(*caller_)[index]);
-  std::lock_guard<std::mutex> one_reader(*reading_[index]);
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (resident_[index]) {
-      recent_.remove(index);
-      recent_.push_front(index);
-      return resident_[index];
-    }
-  }
-  Expected<Scan> read = read_(index);  // outside the store's lock: other scans are served meanwhile
-  if (!read) return read.error();
-  const Scan& head = heads_[index];
-  read->name = head.name;
-  read->world_from_scan = head.world_from_scan;
-  read->reference_world_from_scan = head.reference_world_from_scan;
-  auto scan = std::make_shared<const Scan>(std::move(*read));
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++reads_;
-  resident_[index] = scan;
-  bytes_[index] = ScanBytes(*scan);
-  held_ += bytes_[index];
-  recent_.push_front(index);
-  Trim();
-  peak_ = std::max(peak_, held_);
-  return scan;
+  const Expected<std::shared_ptr<const void>> held = Hold(index, [&]() -> Expected<Made> {
+    Expected<Scan> read = read_(index);
+    if (!read) return read.error();
+    const Scan& head = heads_[index];
+    read->name = head.name;
+    read->world_from_scan = head.world_from_scan;
+    read->reference_world_from_scan = head.reference_world_from_scan;
+    auto scan = std::make_shared<const Scan>(std::move(*read));
+    const std::size_t bytes = ScanBytes(*scan);
+    return Made{scan, bytes};
+  });
+  if (!held) return held.error();
+  return std::static_pointer_cast<const Scan>(*held);
+}
+
+std::shared_ptr<const IcpSurface> ScanStore::Surface(int index,
+                                                     const std::function<std::shared_ptr<const IcpSurface>()>& build) {
+  if (index < 0 || index >= size()) return nullptr;
+  const Expected<std::shared_ptr<const void>> held = Hold(size() + index, [&]() -> Expected<Made> {
+    std::shared_ptr<const IcpSurface> surface = build();
+    const std::size_t bytes = surface ? surface->Bytes() : 0;
+    return Made{surface, bytes};
+  });
+  return held ? std::static_pointer_cast<const IcpSurface>(*held) : nullptr;
 }
 
 void ScanStore::Trim() {
-  // Least recently used first; the scan just read (the front) always stays.
+  // Least recently used first; the slot just made (the front) always stays.
   while (held_ > budget_ && recent_.size() > 1) {
     const int i = recent_.back();
     recent_.pop_back();
@@ -119,6 +147,11 @@ void ScanStore::Trim() {
 int ScanStore::reads() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return reads_;
+}
+
+int ScanStore::surface_builds() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return builds_;
 }
 
 std::size_t ScanStore::peak_bytes() const {

@@ -100,6 +100,10 @@ IcpSurface::IcpSurface(std::vector<Eigen::Vector3d> samples, const DenseIcpOptio
 
 IcpSurface::~IcpSurface() = default;
 
+std::size_t IcpSurface::Bytes() const {
+  return (points.capacity() + normals.capacity()) * sizeof(Eigen::Vector3d) + (index ? index->Bytes() : 0);
+}
+
 Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<Eigen::Vector3d>& child_samples,
                                     Eigen::Isometry3d initial_parent_from_child, const DenseIcpOptions& options,
                                     ProgressSink& progress, const CancelToken& cancel) {

@@ -79,6 +79,7 @@ Expected<IcpResult> DenseIcp(const Scan& parent, const Scan& child, Eigen::Isome
 struct IcpSurface {
   IcpSurface(std::vector<Eigen::Vector3d> samples, const DenseIcpOptions& options);
   ~IcpSurface();
+  std::size_t Bytes() const;  // memory held
   std::vector<Eigen::Vector3d> points;
   std::unique_ptr<PointIndex> index;
   std::vector<Eigen::Vector3d> normals;  // zero where the neighbourhood is not planar

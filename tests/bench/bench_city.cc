@@ -137,8 +137,8 @@ void RunCityBench(Table& table, bool quick) {
         moved = std::max(moved, (r->scans[i].world_from_scan.translation() - in_memory_poses[i].translation()).norm());
       char same[80] = "no in-memory run to compare";
       if (!in_memory_poses.empty()) std::snprintf(same, sizeof same, "poses within %.2g mm of the in-memory run", moved * 1e3);
-      std::snprintf(note, sizeof note, "%d reads of %d scans, at most %s of scans held (budget %s); %s",
-                    store->reads(), n, pipeline::FormatBytes(store->peak_bytes()).c_str(),
+      std::snprintf(note, sizeof note, "%d reads of %d scans, %d surface builds, at most %s held (budget %s); %s",
+                    store->reads(), n, store->surface_builds(), pipeline::FormatBytes(store->peak_bytes()).c_str(),
                     pipeline::FormatBytes(store->budget_bytes()).c_str(), same);
       table.Add({kSection, label + ": peak resident memory", PeakMemoryMiB(), "MiB", note});
     } else if (candidates == 10 && global) {

@@ -30,6 +30,9 @@ TEST(MemoryBudget, ABudgetSmallerThanAScanGivesTheSameRegistration) {
   const nlohmann::json m_all = Memory(all);
   ASSERT_TRUE(m_all.is_object()) << all.output;
   EXPECT_EQ(m_all.at("scan_reads").get<int>(), 6) << "a budget that holds every scan reads each once";
+  const int builds_all = m_all.at("surface_builds").get<int>();
+  EXPECT_GE(builds_all, 1);
+  EXPECT_LE(builds_all, 6) << "a budget that holds every surface builds each at most once";
 
   // A 600 x 150 scan holds 1.5 MB; 1M keeps only the scans in use.
   const RunResult small = RunCli("register " + Quote(read_again) + " --candidates 3 --memory-budget 1M --json");
@@ -37,7 +40,8 @@ TEST(MemoryBudget, ABudgetSmallerThanAScanGivesTheSameRegistration) {
   const nlohmann::json m_small = Memory(small);
   ASSERT_TRUE(m_small.is_object()) << small.output;
   EXPECT_GT(m_small.at("scan_reads").get<int>(), 12) << "read for the scale, the features and the pairs' free-space tests";
-  EXPECT_LT(m_small.at("peak_scan_bytes").get<double>(), 0.5 * m_all.at("peak_scan_bytes").get<double>());
+  EXPECT_LT(m_small.at("peak_bytes").get<double>(), 0.5 * m_all.at("peak_bytes").get<double>());
+  EXPECT_GT(m_small.at("surface_builds").get<int>(), builds_all) << "surfaces dropped under the budget are built again";
   test::ExpectSameRegistration(held, read_again);
 }
 

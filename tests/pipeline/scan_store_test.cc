@@ -82,6 +82,49 @@ TEST(ScanStore, ScansInMemoryAreNeverRead) {
   EXPECT_TRUE(store.heads()[1].points.empty());
 }
 
+// A surface whose samples encode the scan (a 30 x 30 plane at height `index`).
+std::shared_ptr<const IcpSurface> Plane(int index) {
+  std::vector<Eigen::Vector3d> pts;
+  for (int x = 0; x < 30; ++x)
+    for (int y = 0; y < 30; ++y) pts.emplace_back(0.1 * x, 0.1 * y, double(index));
+  return std::make_shared<const IcpSurface>(pts, DenseIcpOptions());
+}
+
+TEST(ScanStore, SurfacesShareTheBudgetWithTheScans) {
+  Counting source;
+  const std::size_t scan = ScanBytes(Numbered(0)), surface = Plane(0)->Bytes();
+  ASSERT_GT(surface, 900 * 2 * sizeof(Eigen::Vector3d));  // points and normals at least
+  ScanStore store(source.heads, source.reader(), scan + surface);  // room for one scan and one surface
+  int builds = 0;
+  const auto surface_of = [&](int i) {
+    return store.Surface(i, [&, i] {
+      ++builds;
+      return Plane(i);
+    });
+  };
+  std::shared_ptr<const IcpSurface> s0 = surface_of(0);
+  ASSERT_TRUE(s0);
+  EXPECT_DOUBLE_EQ(s0->points.front().z(), 0.0);
+  EXPECT_EQ(surface_of(0), s0);  // resident: the same, not built again
+  EXPECT_EQ(builds, 1);
+  ASSERT_TRUE(store.Get(1).ok());
+  EXPECT_EQ(surface_of(0), s0);  // one scan and one surface fit
+  EXPECT_EQ(builds, 1);
+  ASSERT_TRUE(store.Get(2).ok());  // a second scan: the least recently used (scan 1) goes
+  EXPECT_EQ(*source.reads, 2);
+  EXPECT_LE(store.peak_bytes(), scan + surface);
+  std::shared_ptr<const IcpSurface> s3 = surface_of(3);  // a second surface: surface 0 goes (scan 2 is newer)
+  EXPECT_DOUBLE_EQ(s3->points.front().z(), 3.0);
+  EXPECT_EQ(builds, 2);
+  s0.reset();
+  std::shared_ptr<const IcpSurface> again = surface_of(0);
+  EXPECT_EQ(builds, 3);
+  EXPECT_DOUBLE_EQ(again->points.front().z(), 0.0);
+  EXPECT_EQ(store.surface_builds(), 3);
+  EXPECT_EQ(store.reads(), 2);
+  EXPECT_LE(store.peak_bytes(), scan + surface);
+}
+
 TEST(ScanStore, MemoryBudgetsAreParsedWithTheirUnits) {
   EXPECT_EQ(*ParseMemoryBudget("6G"), std::size_t(6) << 30);
   EXPECT_EQ(*ParseMemoryBudget("800M"), std::size_t(800) << 20);
