@@ -264,9 +264,9 @@ int RunRegister(const std::vector<std::string>& argv) {
         "DIR      register with the pair registrations of the jobs planned in DIR (the same result as "
         "without them; a pair with no job result is registered here)"},
        {"memory-budget", true, false,
-        "SIZE     hold at most this much of full scans in memory (e.g. 6G, 800M); the others are read "
-        "again from the binary scan cache when a pair needs them (default: a quarter of the RAM). The "
-        "result does not depend on it"}},
+        "SIZE     hold at most this much of full scans and dense-ICP surfaces in memory (e.g. 6G, 800M); "
+        "the others are read again from the binary scan cache, or built again, when a pair needs them "
+        "(default: a quarter of the RAM). The result does not depend on it"}},
       &code);
   if (!args) return code;
   if (args->positional().size() != 1) {
