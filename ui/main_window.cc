@@ -660,8 +660,7 @@ bool MainWindow::AddScans(const QStringList& scan_files) {
         std::vector<std::string> skipped;
         const std::size_t before = project.scans.size();
         SubProgress append(progress, 0.0, 0.8);
-        Expected<std::vector<Scan>> read = pipeline::AppendScanFiles(project, files, false, append, cancel, &skipped);
-        if (!read) return read.error();
+        if (Status s = pipeline::AppendScanFiles(project, files, append, cancel, &skipped); !s) return s.error();
         std::vector<int> added;
         for (std::size_t i = before; i < project.scans.size(); ++i) added.push_back(static_cast<int>(i));
         std::vector<pipeline::ScanPreview> previews;

@@ -107,13 +107,11 @@ Status ApplyPoses(const std::filesystem::path& pose_file, const std::vector<io::
 
 }  // namespace
 
-Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
-                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel,
-                                            std::vector<std::string>* skipped) {
+Status AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
+                       ProgressSink& progress, const CancelToken& cancel, std::vector<std::string>* skipped) {
   io::Project result = project;
   std::set<std::string> names;
   for (const io::ProjectScan& s : result.scans) names.insert(s.name);
-  std::vector<Scan> read;
   // A problem with one file: an error, or with `skipped` a line of the list and the next file.
   auto refuse = [&](Error e) -> bool {
     if (!skipped || e.code == ErrorCode::kCancelled) return false;
@@ -143,7 +141,7 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
     const std::set<std::string> names_before = names;
     bool bad_file = false;
     for (std::size_t k = 0; k < scans->size() && !bad_file; ++k) {
-      Scan& scan = (*scans)[k];
+      const Scan& scan = (*scans)[k];
       if (scan.CountValid() == 0) {
         Error e = MakeError(ErrorCode::kInvalidArgument, "scan '" + scan.name + "' in '" + path.string() +
                                                              "' has no valid point; remove it from the list");
@@ -161,12 +159,9 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
       ps.registered = ps.imported_pose = !scan.world_from_scan.matrix().isIdentity(1e-12);
       if (ps.imported_pose) ps.file_up = scan.world_from_scan.linear().transpose() * Eigen::Vector3d::UnitZ();
       ps.reference_world_from_scan = scan.reference_world_from_scan;
-      scan.name = ps.name;
       result.scans.push_back(std::move(ps));
-      if (keep_scans) read.push_back(std::move(scan));
     }
     if (bad_file) {
-      if (keep_scans) read.resize(read.size() - (result.scans.size() - first_new));
       result.scans.resize(first_new);
       names = names_before;
     }
@@ -174,7 +169,7 @@ Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vec
   // A single scan is its own frame: nothing to register it to, and it can be merged and exported.
   if (result.scans.size() == 1) result.scans[0].registered = true;
   project = std::move(result);
-  return read;
+  return Status::Ok();
 }
 
 Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path, const CreateProjectOptions& options,
@@ -185,9 +180,10 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
   io::Project project;
   project.file = std::filesystem::absolute(project_path);
   std::vector<std::string> skipped;
-  Expected<std::vector<Scan>> scans = AppendScanFiles(project, options.scan_files, options.keep_scans, progress, cancel,
-                                                      options.skip_unreadable ? &skipped : nullptr);
-  if (!scans) return scans.error();
+  if (Status s = AppendScanFiles(project, options.scan_files, progress, cancel,
+                                 options.skip_unreadable ? &skipped : nullptr);
+      !s)
+    return s.error();
   if (project.scans.empty()) {
     std::string all;
     for (const std::string& why : skipped) all += "\n  " + why;
@@ -206,7 +202,7 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
     return MakeError(ErrorCode::kInvalidArgument, "check points need a control file (--control FILE)");
   }
   if (Status s = io::SaveProject(project, project_path, &project.disk_digest); !s) return s.error();
-  return CreatedProject{std::move(project), std::move(*scans), std::move(skipped)};
+  return CreatedProject{std::move(project), std::move(skipped)};
 }
 
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,

@@ -25,7 +25,6 @@ struct CreateProjectOptions {
   // Survey control points (io::ReadControlFile) and the names of those that are check points.
   std::optional<std::filesystem::path> control;
   std::vector<std::string> check_points;
-  bool keep_scans = false;  // return the scans read (the GUI shows them); else only the project
   // Files that cannot be added (unreadable, a scan without points, already in the project) are left
   // out and listed in CreatedProject::skipped (the GUI); otherwise the first one is the error (the CLI).
   bool skip_unreadable = false;
@@ -33,7 +32,6 @@ struct CreateProjectOptions {
 
 struct CreatedProject {
   io::Project project;      // as saved (disk_digest set)
-  std::vector<Scan> scans;  // with keep_scans: in project order; else empty
   std::vector<std::string> skipped;  // with skip_unreadable: why each file left out was left out
 };
 
@@ -50,15 +48,14 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
 
 // Reads scan files and appends their scans to `project` (the GUI's Add scans): each scan named
 // uniquely within the project (a suffix on collision), its pose from the file (imported when the
-// file holds a registered pose; a project of one scan has that scan in place). With keep_scans,
-// returns the scans read, in the order appended, named as in the project (otherwise an empty
-// list: each file's points are dropped once checked). A file already in the project is refused
+// file holds a registered pose; a project of one scan has that scan in place). Each file's points
+// are dropped once checked; the project's scan cache keeps them (read them back with
+// LoadProjectScans or LoadScanPreviews). A file already in the project is refused
 // (not added twice). Without `skipped`, the first file that cannot be added is the error and
 // `project` is unchanged; with it, every such file is left out (whole) with its reason listed there
 // and the others are added (batch add: one bad file does not stop the rest).
-Expected<std::vector<Scan>> AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
-                                            bool keep_scans, ProgressSink& progress, const CancelToken& cancel,
-                                            std::vector<std::string>* skipped = nullptr);
+Status AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
+                       ProgressSink& progress, const CancelToken& cancel, std::vector<std::string>* skipped = nullptr);
 
 // Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
 // header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose

@@ -36,18 +36,21 @@ TEST(AppendScanFiles, NamesScansUniquelyAndKeepsTheirPoses) {
   const auto a2 = WritePtxFile(dir, "ab_1.ptx", {PlaneScan("a", 3.0)});
   io::Project project;
   NullProgress progress;
-  auto first = AppendScanFiles(project, {ab}, true, progress, CancelToken());
+  const Status first = AppendScanFiles(project, {ab}, progress, CancelToken());
   ASSERT_TRUE(first.ok()) << first.error().message;
-  auto second = AppendScanFiles(project, {a2}, true, progress, CancelToken());
+  const Status second = AppendScanFiles(project, {a2}, progress, CancelToken());
   ASSERT_TRUE(second.ok()) << second.error().message;
   ASSERT_EQ(project.scans.size(), 3u);
   EXPECT_EQ(project.scans[0].name, "ab_1");
   EXPECT_EQ(project.scans[1].name, "ab_2");
   EXPECT_EQ(project.scans[2].name, "ab_1_2");
   EXPECT_EQ(project.scans[1].index_in_file, 1);
-  ASSERT_EQ(second->size(), 1u);
-  EXPECT_EQ((*second)[0].name, "ab_1_2");
-  EXPECT_EQ((*second)[0].CountValid(), PlaneScan("a", 0).CountValid());
+  // The appended scan reads back named as in the project, with its file's points.
+  auto read = LoadProjectScans(project, progress, CancelToken(), {2});
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  ASSERT_EQ(read->size(), 1u);
+  EXPECT_EQ((*read)[0].name, "ab_1_2");
+  EXPECT_EQ((*read)[0].CountValid(), PlaneScan("a", 0).CountValid());
   EXPECT_NEAR(project.scans[2].world_from_scan.translation().x(), 3.0, 1e-9);
   EXPECT_NEAR(project.scans[1].world_from_scan.translation().x(), 2.0, 1e-9);
 }
@@ -62,7 +65,7 @@ TEST(AppendScanFiles, AFilesPoseGivesTheScansVertical) {
   const auto file = WritePtxFile(dir, "t.ptx", {tilted, PlaneScan("u", 2.0)});
   io::Project project;
   NullProgress progress;
-  ASSERT_TRUE(AppendScanFiles(project, {file}, false, progress, CancelToken()).ok());
+  ASSERT_TRUE(AppendScanFiles(project, {file}, progress, CancelToken()).ok());
   ASSERT_TRUE(project.scans[0].file_up.has_value());
   const Eigen::Vector3d expect = tilted.world_from_scan.linear().transpose() * Eigen::Vector3d::UnitZ();
   EXPECT_LT((*project.scans[0].file_up - expect).norm(), 1e-9);
@@ -77,25 +80,14 @@ TEST(AppendScanFiles, AFilesPoseGivesTheScansVertical) {
   EXPECT_LT((*loaded->scans[0].file_up - expect).norm(), 1e-12);
 }
 
-TEST(AppendScanFiles, WithoutKeepingScansReturnsNoneButAppends) {
-  test::TempDir dir;
-  const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
-  io::Project project;
-  NullProgress progress;
-  auto scans = AppendScanFiles(project, {ab}, false, progress, CancelToken());
-  ASSERT_TRUE(scans.ok());
-  EXPECT_TRUE(scans->empty());
-  EXPECT_EQ(project.scans.size(), 2u);
-}
-
 TEST(AppendScanFiles, ErrorNamesTheFileAndLeavesTheProjectUnchanged) {
   test::TempDir dir;
   const auto ab = WritePtxFile(dir, "ab.ptx", {PlaneScan("a", 1.0), PlaneScan("b", 2.0)});
   io::Project project;
   NullProgress progress;
-  ASSERT_TRUE(AppendScanFiles(project, {ab}, false, progress, CancelToken()).ok());
+  ASSERT_TRUE(AppendScanFiles(project, {ab}, progress, CancelToken()).ok());
   const auto c = WritePtxFile(dir, "c.ptx", {PlaneScan("c", 3.0)});
-  auto bad = AppendScanFiles(project, {c, dir / "missing.ptx"}, true, progress, CancelToken());
+  const Status bad = AppendScanFiles(project, {c, dir / "missing.ptx"}, progress, CancelToken());
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("missing.ptx"), std::string::npos) << bad.error().message;
   EXPECT_EQ(project.scans.size(), 2u);
@@ -108,13 +100,14 @@ TEST(CreateProject, SavesTheProjectWithEveryScan) {
   NullProgress progress;
   CreateProjectOptions options;
   options.scan_files = {ab, ab2};
-  options.keep_scans = true;  // as the GUI creates a project: the scans come back, named as in it
   auto project = CreateProject(dir / "p.scanreg.json", options, progress, CancelToken());
   ASSERT_TRUE(project.ok()) << project.error().message;
-  ASSERT_EQ(project->scans.size(), 4u);
+  auto scans = LoadProjectScans(project->project, progress, CancelToken());  // as the GUI reads them back
+  ASSERT_TRUE(scans.ok()) << scans.error().message;
+  ASSERT_EQ(scans->size(), 4u);
   for (std::size_t i = 0; i < 4; ++i) {
-    EXPECT_EQ(project->scans[i].name, project->project.scans[i].name);
-    EXPECT_GT(project->scans[i].CountValid(), 0u);
+    EXPECT_EQ((*scans)[i].name, project->project.scans[i].name);
+    EXPECT_GT((*scans)[i].CountValid(), 0u);
   }
   auto loaded = io::LoadProject(dir / "p.scanreg.json");
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
@@ -149,13 +142,12 @@ TEST(AppendScanFiles, BatchAddAddsEveryReadableFileAndListsEveryError) {
   io::Project project;
   NullProgress progress;
   std::vector<std::string> skipped;
-  auto scans = AppendScanFiles(project, {a, dir / "missing.ptx", garbage, no_points, b, a}, true, progress,
-                               CancelToken(), &skipped);
-  ASSERT_TRUE(scans.ok()) << scans.error().message;
+  const Status added =
+      AppendScanFiles(project, {a, dir / "missing.ptx", garbage, no_points, b, a}, progress, CancelToken(), &skipped);
+  ASSERT_TRUE(added.ok()) << added.error().message;
   ASSERT_EQ(project.scans.size(), 2u);
   EXPECT_EQ(project.scans[0].name, "a");
   EXPECT_EQ(project.scans[1].name, "b");
-  EXPECT_EQ(scans->size(), 2u);
   ASSERT_EQ(skipped.size(), 4u);
   EXPECT_NE(skipped[0].find("missing.ptx"), std::string::npos) << skipped[0];
   EXPECT_NE(skipped[1].find("garbage.ptx"), std::string::npos) << skipped[1];
@@ -235,7 +227,6 @@ TEST(CreateProject, HeaderPosesAreImportedAndASingleScanIsInPlace) {
   ASSERT_TRUE(two.ok()) << two.error().message;
   EXPECT_EQ(io::ScanPoseState(two->project.scans[0]), io::PoseState::kImported);
   EXPECT_EQ(io::ScanPoseState(two->project.scans[1]), io::PoseState::kUnregistered);
-  EXPECT_TRUE(two->scans.empty());  // without keep_scans the points are dropped once checked
   // One scan alone is its own frame: usable by merge and export without registration.
   options.scan_files = {WritePtxFile(dir, "one.ptx", {raw})};
   auto one = CreateProject(dir / "one.scanreg.json", options, progress, CancelToken());
