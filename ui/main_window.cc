@@ -195,6 +195,7 @@ void MainWindow::CreateDocks() {
     dock->setWidget(widget == merge_panel_ ? Scrollable(widget) : widget);
     addDockWidget(widget == log_ ? Qt::BottomDockWidgetArea : Qt::RightDockWidgetArea, dock);
     if (widget == merge_panel_ || widget == control_panel_) tabifyDockWidget(first_right, dock);  // tabs beside the scan list
+    if (widget == merge_panel_) connect(dock, &QDockWidget::visibilityChanged, merge_panel_, &MergePanel::SetShown);
     if (!first_right && widget != log_) first_right = dock;
   }
   first_right->raise();

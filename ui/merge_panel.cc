@@ -166,7 +166,17 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   UpdateButtons();
 }
 
+void MergePanel::SetShown(bool shown) {
+  shown_ = shown;
+  if (shown_ && estimate_stale_) estimate_timer_->start();
+}
+
 void MergePanel::UpdateEstimate() {
+  estimate_stale_ = !shown_;
+  if (estimate_stale_) {  // what it said no longer holds
+    estimate_->clear();
+    return;
+  }
   // Counted on the previews, each standing for its scan (stride^2 points a preview point).
   std::vector<const Scan*> scans;
   std::vector<int> strides;

@@ -39,6 +39,8 @@ class MergePanel : public QWidget {
   bool Run();
   // Writes the mesh (by extension: .ply, .obj, .stl) on the worker; false without a mesh.
   bool ExportMesh(const QString& path);
+  // Whether the panel can be seen (its dock's tab in front); a stale estimate is counted on showing.
+  void SetShown(bool shown);
   // The last merged mesh, or null.
   const merge::Mesh* mesh() const { return mesh_.get(); }
 
@@ -49,7 +51,9 @@ class MergePanel : public QWidget {
   void ChooseExportFile();
   void SaveOptions() const;
   void UpdateButtons();
-  void UpdateEstimate();  // the estimate line, from the registered scans and the options
+  // The estimate line, from the registered scans and the options; counted only while the panel is
+  // shown (on a 100-station project the count takes seconds), else when it is next shown.
+  void UpdateEstimate();
   void ShowError(const QString& title, const QString& message);
 
   MainWindow* window_;
@@ -68,6 +72,8 @@ class MergePanel : public QWidget {
   QLabel* summary_ = nullptr;
   QLabel* estimate_ = nullptr;
   QTimer* estimate_timer_ = nullptr;
+  bool shown_ = true;            // SetShown
+  bool estimate_stale_ = false;  // asked for while hidden
   // The voxel is sized to the project (pipeline::SizedMergeOptions) until the user chooses one; a
   // new project is sized again.
   bool voxel_chosen_ = false;
