@@ -20,6 +20,11 @@ namespace scanreg::ui {
 namespace {
 
 constexpr double kNodeRadius = 9.0;  // screen pixels at any zoom
+// Past this many scans (a campaign of a street or a city) nodes are drawn smaller and only the scans
+// that need the user's eye are labelled (root, unregistered, hand-placed, overridden); every scan
+// still names itself in its tooltip.
+constexpr int kLabelAllUpTo = 30;
+constexpr double kSmallNodeRadius = 5.0;
 
 // Node positions in scene units: registered scans at their x/y (y up on screen), others on a circle.
 // Top view of the registered scans: world (x, y) to scene units (600 across the registered extent).
@@ -112,6 +117,9 @@ void NetworkPanel::Show(const io::Project& project) {
     line->setData(0, static_cast<int>(k));
     ++edges_;
   }
+  const bool many = static_cast<int>(project.scans.size()) > kLabelAllUpTo;
+  node_radius_ = many ? kSmallNodeRadius : kNodeRadius;
+  const double r = node_radius_;
   for (int i = 0; i < static_cast<int>(project.scans.size()); ++i) {
     const io::ProjectScan& scan = project.scans[i];
     double rgb[3];
@@ -119,7 +127,7 @@ void NetworkPanel::Show(const io::Project& project) {
     QPen outline(scan.registered ? QColor(30, 30, 30) : QColor(200, 50, 40), scan.registered ? 1.5 : 3);
     if (on_hand[i]) outline = QPen(QColor(230, 120, 0), 3, Qt::DashLine);  // rests on a hand placement
     outline.setCosmetic(true);
-    auto* node = s->addEllipse(-kNodeRadius, -kNodeRadius, 2 * kNodeRadius, 2 * kNodeRadius, outline,
+    auto* node = s->addEllipse(-r, -r, 2 * r, 2 * r, outline,
                                QBrush(QColor::fromRgbF(rgb[0], rgb[1], rgb[2])));
     node->setFlag(QGraphicsItem::ItemIgnoresTransformations);
     node->setPos(pos_[i]);
@@ -128,12 +136,13 @@ void NetworkPanel::Show(const io::Project& project) {
     if (on_hand[i]) text += tr(" (hand)");
     if (!scan.registered && !scan.cluster.empty()) text += tr(" [cluster %1]").arg(QString::fromStdString(scan.cluster));
     if (scan.parent_override) text += " ✎";
+    ++nodes_;
+    if (many && project.root != scan.name && !on_hand[i] && scan.registered && !scan.parent_override) continue;
     auto* label = s->addSimpleText(text);
     label->setFlag(QGraphicsItem::ItemIgnoresTransformations);
     label->setPos(pos_[i]);
-    label->setTransform(QTransform::fromTranslate(kNodeRadius + 2, -kNodeRadius - 14));
+    label->setTransform(QTransform::fromTranslate(r + 2, -r - 14));
     label->setBrush(palette().text());
-    ++nodes_;
   }
   // Targets (issue 15): where the registered scans that saw them put them, one mark per target
   // (the mean of its observations); tied to control blue, others grey, red beyond 1 cm residual.
@@ -175,7 +184,7 @@ void NetworkPanel::Show(const io::Project& project) {
 }
 
 QString NetworkPanel::ScanAt(QPoint view_pos) const {
-  double best = kNodeRadius + 4;
+  double best = node_radius_ + 4;
   QString out;
   for (std::size_t i = 0; i < pos_.size() && i < project_.scans.size(); ++i) {
     const QPointF d = QPointF(mapFromScene(pos_[i])) - QPointF(view_pos);

@@ -51,6 +51,7 @@ class NetworkPanel : public ZoomView {
   void AddLinkActions(QMenu* menu, int link);
   io::Project project_;
   std::vector<QPointF> pos_;  // node positions, scene units
+  double node_radius_ = 9.0;  // screen pixels (smaller on large projects)
   int nodes_ = 0;
   int edges_ = 0;
   int targets_ = 0;

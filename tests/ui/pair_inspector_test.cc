@@ -63,6 +63,28 @@ class PairInspectorTest : public QObject {
   Q_OBJECT
 
  private slots:
+  // A campaign's network stays readable: past 30 scans the nodes are smaller and only the scans that
+  // need the user's eye (root, unregistered) are labelled; a small project labels every scan.
+  void ALargeNetworkLabelsOnlyTheScansThatNeedAttention() {
+    for (const int n : {10, 40}) {
+      scanreg::io::Project project;
+      for (int i = 0; i < n; ++i) {
+        scanreg::io::ProjectScan s;
+        s.name = "s" + std::to_string(i);
+        s.registered = i != 7;
+        s.world_from_scan.translation() = Eigen::Vector3d(10.0 * i, 0, 0);
+        project.scans.push_back(s);
+      }
+      project.root = "s0";
+      scanreg::ui::NetworkPanel panel;
+      panel.Show(project);
+      QCOMPARE(panel.NodeCount(), n);
+      int labels = 0;
+      for (QGraphicsItem* item : panel.scene()->items()) labels += dynamic_cast<QGraphicsSimpleTextItem*>(item) != nullptr;
+      QCOMPARE(labels, n == 10 ? 10 : 2);
+    }
+  }
+
   // Issue 14: a pair that failed before its surfaces were compared shows "—", not "0.0 mm".
   void AFailedPairShowsADashForWhatItNeverMeasured() {
     scanreg::ui::PairPanel panel;
