@@ -60,6 +60,15 @@ Status SetNumber(const RegisterSetting& s, const std::string& value, double lo, 
   return Status::Ok();
 }
 
+// A count of scans from 0 to 1000; `zero` says what 0 means.
+Status SetScanCount(const RegisterSetting& s, const std::string& value, const std::string& zero, int* out) {
+  double k = 0;
+  if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
+  if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: " + zero + ")");
+  *out = static_cast<int>(k);
+  return Status::Ok();
+}
+
 }  // namespace
 
 const std::vector<RegisterSetting>& RegisterSettings() {
@@ -140,20 +149,8 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
     o->georef.levelled_sigma_rad = deg * M_PI / 180.0;
     return Status::Ok();
   }
-  if (key == "register.candidates") {
-    double k = 0;
-    if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
-    if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: every pair)");
-    o->candidates = static_cast<int>(k);
-    return Status::Ok();
-  }
-  if (key == "register.global_partners") {
-    double k = 0;
-    if (Status st = SetNumber(s, value, 0.0, 1000.0, &k); !st) return st;
-    if (k != std::floor(k)) return Bad(s, value, "give a whole number of scans (0: every overlapping pair)");
-    o->global_partners = static_cast<int>(k);
-    return Status::Ok();
-  }
+  if (key == "register.candidates") return SetScanCount(s, value, "every pair", &o->candidates);
+  if (key == "register.global_partners") return SetScanCount(s, value, "every overlapping pair", &o->global_partners);
   return MakeError(ErrorCode::kInvalidArgument, std::string("unknown registration setting '") + s.key + "'");
 }
 

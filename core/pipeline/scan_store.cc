@@ -71,13 +71,17 @@ ScanStore::ScanStore(std::vector<Scan> heads, Reader read, std::size_t budget_by
   for (std::size_t i = 0; i < 2 * heads_.size(); ++i) making_.push_back(std::make_unique<std::mutex>());
 }
 
+namespace {
+std::vector<Scan> HeadsOf(const std::vector<Scan>& scans) {
+  std::vector<Scan> heads;
+  for (const Scan& s : scans) heads.push_back(ScanHead(s));
+  return heads;
+}
+}  // namespace
+
 ScanStore::ScanStore(const std::vector<Scan>& scans)
-    : ScanStore(std::vector<Scan>(), nullptr, std::numeric_limits<std::size_t>::max()) {
+    : ScanStore(HeadsOf(scans), nullptr, std::numeric_limits<std::size_t>::max()) {
   caller_ = &scans;
-  for (const Scan& s : scans) heads_.push_back(ScanHead(s));
-  resident_.resize(2 * heads_.size());
-  bytes_.assign(2 * heads_.size(), 0);
-  for (std::size_t i = 0; i < 2 * heads_.size(); ++i) making_.push_back(std::make_unique<std::mutex>());
 }
 
 Expected<std::shared_ptr<const void>> ScanStore::Hold(int slot, const std::function<Expected<Made>()>& make) {
