@@ -122,37 +122,35 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
 }
 
 float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                   const std::vector<int>& candidates, float* distance) {
-  const double band = options.Band();
-  thread_local std::vector<std::pair<float, int>> nearest;  // per scan: (distance, patch)
-  nearest.assign(patches.scanner.size(), {std::numeric_limits<float>::max(), -1});
-  for (auto it = candidates.begin(); it != candidates.end(); ++it) {
-    const Patch& p = patches.patches[*it];
-    if (!patches.Reaches(*it, x, float(band))) continue;
-    const float d =
-        (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]) - x).norm();
-    if (d > band || d >= nearest[p.scan].first) continue;
-    nearest[p.scan] = {d, *it};
-    if (patches.views[p.scan].empty()) continue;
-    // A scan with a range image needs only one patch within the band (x is projected into it):
-    // skip the rest of its patches (ascending ids are grouped by scan).
-    it = std::partition_point(it, candidates.end(), [&](int id) { return patches.patches[id].scan == p.scan; }) - 1;
-  }
+                   const int* near_begin, const int* near_end, const std::vector<int>& candidates, float* distance) {
+  const float band = float(options.Band());
   double sum = 0.0, weight = 0.0;
   bool projected = false;
-  for (std::size_t s = 0; s < nearest.size(); ++s) {
+  for (const int* s = near_begin; s != near_end; ++s) {
+    const RangeView& view = patches.views[*s];
+    if (view.empty()) continue;
+    projected = true;
+    float surface = 0.0f, range = 0.0f;
+    if (!view.RangeAlong(x, band, &surface, &range)) continue;
+    const float sdf = surface - range;  // > 0: x lies in front of the surface (outside)
+    if (std::abs(sdf) > band) continue;
+    sum += sdf;
+    weight += 1.0;
+  }
+  // Scans without a range image: the nearest patch of each within the band.
+  thread_local std::vector<std::pair<float, int>> nearest;  // per scan: (distance, patch)
+  if (!candidates.empty()) nearest.assign(patches.scanner.size(), {std::numeric_limits<float>::max(), -1});
+  for (int id : candidates) {
+    const Patch& p = patches.patches[id];
+    if (!patches.views[p.scan].empty() || !patches.Reaches(id, x, band)) continue;
+    const float d =
+        (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]) - x).norm();
+    if (d <= band && d < nearest[p.scan].first) nearest[p.scan] = {d, id};
+  }
+  bool unviewed = false;
+  for (std::size_t s = 0; !candidates.empty() && s < nearest.size(); ++s) {
     if (nearest[s].second < 0) continue;
-    if (!patches.views[s].empty()) {
-      projected = true;
-      // Curless-Levoy: project x into the scan's range image.
-      float surface = 0.0f, range = 0.0f;
-      if (!patches.views[s].RangeAlong(x, float(band), &surface, &range)) continue;
-      const float sdf = surface - range;  // > 0: x lies in front of the surface (outside)
-      if (std::abs(sdf) > band) continue;
-      sum += sdf;
-      weight += 1.0;
-      continue;
-    }
+    unviewed = true;
     const Patch& p = patches.patches[nearest[s].second];
     const Eigen::Vector3f& eye = patches.scanner[s];
     const Eigen::Vector3f ray = x - eye;
@@ -170,7 +168,7 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
     weight += w;
   }
   if (weight <= 0.0) {
-    if (projected) return 0.0f;  // range images say: not near their surface (or occluded)
+    if (projected || !unviewed) return 0.0f;  // range images say: not near their surface (or occluded)
     // Scans without angles only, each seeing its nearest patch too obliquely: the distance along the normal of the
     // nearest patch, with a token weight, so that the surface has no hole there.
     float best = std::numeric_limits<float>::max();
@@ -180,7 +178,7 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
       best = d;
       *distance = (x - patches.points[p.v[0]]).dot(p.normal);
     }
-    return best <= band ? 1e-3f : 0.0f;
+    return 1e-3f;
   }
   *distance = float(sum / weight);
   return float(weight);
@@ -191,19 +189,45 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   if (Status s = options.Validate(); !s) return s.error();
   const double band = options.Band();
   const bool ml = options.method == MergeMethod::kMaximumLikelihood;
-  patches.BuildHash(CandidateRadius(options));
+  // TSDF projects into range images: the patch hash only for scans without one (and for ML).
+  const bool unviewed = std::any_of(patches.views.begin(), patches.views.end(), [](const RangeView& v) { return v.empty(); });
+  const bool use_patches = ml || unviewed;
+  if (use_patches) patches.BuildHash(CandidateRadius(options));
   SparseGrid grid(patches.origin, options.voxel_m);
   if (bounds) grid.Restrict(*bounds);
   progress.Report(0.0, "allocating blocks");
-  if (!bounds) {  // counted first: the blocks are allocated once, without a reallocation's double peak
+  {  // counted first: the blocks are allocated once, without reallocations (a tile's margin included)
     BlockCounter counter(options.voxel_m, band, patches.points.size() * 27 + 1);
     for (const Eigen::Vector3f& p : patches.points) counter.Add(p);
     grid.Reserve(counter.count());
   }
-  for (std::size_t i = 0; i < patches.points.size(); ++i) {
-    if ((i & 0xFFFFF) == 0 && cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
-    grid.AllocateAround(patches.points[i], band);
+  // For TSDF, the scans with a point within the band of each block (ascending; CSR over blocks):
+  // the range images a grid point of the block is projected into.
+  std::vector<std::pair<std::uint32_t, int>> touches;  // (block, scan)
+  std::vector<int> last_scan;                          // per block: the last scan that touched it
+  for (std::size_t s = 0; s + 1 < patches.scan_begin.size(); ++s) {
+    for (std::size_t i = patches.scan_begin[s]; i < patches.scan_begin[s + 1]; ++i) {
+      if ((i & 0xFFFFF) == 0 && cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+      if (ml) {
+        grid.AllocateAround(patches.points[i], band);
+        continue;
+      }
+      grid.AllocateAround(patches.points[i], band, [&](std::size_t b) {
+        if (b >= last_scan.size()) last_scan.resize(std::max(b + 1, 2 * last_scan.size()), -1);
+        if (last_scan[b] != int(s)) last_scan[b] = int(s), touches.emplace_back(std::uint32_t(b), int(s));
+      });
+    }
   }
+  last_scan = {};
+  std::vector<std::size_t> near_begin(grid.num_blocks() + 1, 0);
+  for (const auto& t : touches) ++near_begin[t.first + 1];
+  for (std::size_t b = 0; b < grid.num_blocks(); ++b) near_begin[b + 1] += near_begin[b];
+  std::vector<int> near_scans(touches.size());
+  {
+    std::vector<std::size_t> cursor(near_begin.begin(), near_begin.end() - 1);
+    for (const auto& t : touches) near_scans[cursor[t.first]++] = t.second;
+  }
+  touches = {};
   const long n = long(grid.num_blocks());
   std::atomic<long> done{0};
   std::atomic<bool> cancelled{false};
@@ -221,6 +245,8 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
       continue;
     }
     SparseGrid::Block& b = grid.block(bi);
+    const int* near = near_scans.data() + near_begin[bi];
+    const int* near_end = near_scans.data() + near_begin[bi + 1];
     std::vector<int> group, candidates;
     // One hash query per G^3 group of grid points, then a bounding-sphere filter per point: the
     // same candidates as a query per point, without its hash look-ups and sorting.
@@ -229,8 +255,8 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
         for (int gx = 0; gx < B; gx += G) {
           const Eigen::Vector3f centre =
               0.5f * (grid.Position(b.key, gx, gy, gz) + grid.Position(b.key, gx + G - 1, gy + G - 1, gz + G - 1));
-          patches.Candidates(centre, radius + group_reach, &group);
-          if (group.empty()) continue;
+          if (use_patches) patches.Candidates(centre, radius + group_reach, &group);
+          if (group.empty() && near == near_end) continue;
           for (int z = gz; z < gz + G; ++z) {
             for (int y = gy; y < gy + G; ++y) {
               for (int x = gx; x < gx + G; ++x) {
@@ -242,8 +268,8 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
                   if (MaximumLikelihoodDistance(patches, p, options, candidates, &d)) {
                     b.distance[l] = d, b.weight[l] = 1.0f;
                   }
-                } else {  // its bounding-sphere test is inside, after the cheaper one-patch-per-scan test
-                  const float w = TsdfDistance(patches, p, options, group, &d);
+                } else {  // its bounding-sphere test is inside
+                  const float w = TsdfDistance(patches, p, options, near, near_end, group, &d);
                   if (w > 0.0f) b.distance[l] = d, b.weight[l] = w;
                 }
               }

@@ -35,11 +35,13 @@ double CandidateRadius(const MergeOptions& options);
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
                                const std::vector<int>& candidates, float* distance);
 
-// Curless–Levoy: weighted average over scans of the distance along each scanner's line of sight
-// from x to that scan's surface (its range image, or the plane of its nearest patch for scans
-// without angles), truncated to the band; only scans with a patch within the band count.
-// `candidates` as above. Returns the total weight.
+// Curless–Levoy: the average over scans of the distance along each scanner's line of sight from x
+// to that scan's surface, truncated to the band. Scans with a range image count when they are in
+// [near_begin, near_end) (ComputeField passes the scans with a point within the band of x's block)
+// and x projects onto their surface within the band; scans without angles count by the plane of
+// their nearest patch within the band among `candidates` (as above), weighted by its cosine to the
+// line of sight. Returns the total weight.
 float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
-                   const std::vector<int>& candidates, float* distance);
+                   const int* near_begin, const int* near_end, const std::vector<int>& candidates, float* distance);
 
 }  // namespace scanreg::merge

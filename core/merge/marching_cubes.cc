@@ -1,5 +1,7 @@
 #include "core/merge/marching_cubes.h"
 
+#include <algorithm>
+#include <cmath>
 #include <unordered_map>
 
 namespace scanreg::merge {
@@ -21,63 +23,111 @@ Mesh ExtractMesh(const SparseGrid& grid) {
   return std::move(builder.mesh());
 }
 
-void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
-  constexpr int B = SparseGrid::kBlock;
-  Mesh& mesh = mesh_;
-  auto& vertex_of = vertex_of_;
-  mesh.origin = grid.origin();
+namespace {
+
+// One block's cubes: vertices on the edges only its own cubes touch (local ids), the edges it shares
+// with neighbouring blocks (resolved through the builder's map), and triangles referring to either
+// (r >= 0: local vertex r; r < 0: shared edge -r - 1).
+struct BlockPiece {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<std::pair<std::array<int, 4>, Eigen::Vector3f>> shared;  // (i, j, k, axis), position
+  std::vector<Eigen::Vector3i> triangles;
+};
+
+void MeshBlock(const SparseGrid& grid, const SparseGrid::Block& b, BlockPiece* piece) {
+  constexpr int B = SparseGrid::kBlock, P = B + 1;
+  SparseGrid::Neighbourhood around;
+  grid.Gather(b, &around);
   const float h = float(grid.voxel());
-  for (std::size_t bi = 0; bi < grid.num_blocks(); ++bi) {
-    const SparseGrid::Block& b = grid.block(bi);
-    if (own && !own->Contains(b.key)) continue;
-    for (int z = 0; z < B; ++z) {
-      for (int y = 0; y < B; ++y) {
-        for (int x = 0; x < B; ++x) {
-          if (b.weight[SparseGrid::Local(x, y, z)] <= 0.0f) continue;
-          const int gi = b.key.x * B + x, gj = b.key.y * B + y, gk = b.key.z * B + z;
-          float v[8];
-          bool known = true;
-          const bool inside = x + 1 < B && y + 1 < B && z + 1 < B;
-          for (int c = 0; c < 8 && known; ++c) {
-            const int dx = kCorner[c][0], dy = kCorner[c][1], dz = kCorner[c][2];
-            if (inside) {
-              const int l = SparseGrid::Local(x + dx, y + dy, z + dz);
-              known = b.weight[l] > 0.0f;
-              v[c] = b.distance[l];
-            } else {
-              known = grid.Sample(gi + dx, gj + dy, gk + dz, &v[c]);
-            }
+  // Interior edges' local vertex ids, by lower end (0..B on each axis) and axis.
+  std::array<int, P * P * P * 3> local;
+  local.fill(-1);
+  for (int z = 0; z < B; ++z) {
+    for (int y = 0; y < B; ++y) {
+      for (int x = 0; x < B; ++x) {
+        float v[8];
+        bool known = true;
+        for (int c = 0; c < 8 && known; ++c) {
+          v[c] = around[SparseGrid::Padded(x + kCorner[c][0], y + kCorner[c][1], z + kCorner[c][2])];
+          known = !std::isnan(v[c]);
+        }
+        if (!known) continue;
+        int cube = 0;
+        for (int c = 0; c < 8; ++c) cube |= (v[c] < 0.0f) << c;
+        if (kEdgeTable[cube] == 0) continue;
+        int ids[12];
+        for (int e = 0; e < 12; ++e) {
+          if (!(kEdgeTable[cube] & (1u << e))) continue;
+          int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
+          // Key by the edge's lower end so that neighbouring cubes find the same vertex.
+          int axis = 0;
+          for (int a = 0; a < 3; ++a) {
+            if (kCorner[c0][a] != kCorner[c1][a]) axis = a;
           }
-          if (!known) continue;
-          int cube = 0;
-          for (int c = 0; c < 8; ++c) cube |= (v[c] < 0.0f) << c;
-          if (kEdgeTable[cube] == 0) continue;
-          int ids[12];
-          for (int e = 0; e < 12; ++e) {
-            if (!(kEdgeTable[cube] & (1u << e))) continue;
-            int c0 = kEdgeCorners[e][0], c1 = kEdgeCorners[e][1];
-            // Key by the edge's lower end so that neighbouring cubes find the same vertex.
-            int axis = 0;
-            for (int a = 0; a < 3; ++a) {
-              if (kCorner[c0][a] != kCorner[c1][a]) axis = a;
-            }
-            if (kCorner[c0][axis] > kCorner[c1][axis]) std::swap(c0, c1);
-            const EdgeKey key{gi + kCorner[c0][0], gj + kCorner[c0][1], gk + kCorner[c0][2], axis};
-            auto [it, fresh] = vertex_of.try_emplace(key, int(mesh.vertices.size()));
-            if (fresh) {
-              const float t = v[c0] / (v[c0] - v[c1]);
-              Eigen::Vector3f p(float(key.i), float(key.j), float(key.k));
-              p[axis] += t;
-              mesh.vertices.push_back(p * h);
-            }
-            ids[e] = it->second;
-          }
-          for (int t = 0; kTriTable[cube][t] != -1; t += 3) {
-            // Wound counter-clockwise seen from outside (positive side) for this corner numbering.
-            mesh.triangles.emplace_back(ids[kTriTable[cube][t]], ids[kTriTable[cube][t + 1]],
-                                        ids[kTriTable[cube][t + 2]]);
+          if (kCorner[c0][axis] > kCorner[c1][axis]) std::swap(c0, c1);
+          const int end[3] = {x + kCorner[c0][0], y + kCorner[c0][1], z + kCorner[c0][2]};
+          // The four cubes around the edge are all this block's when its other coordinates are 1..B-1.
+          bool interior = true;
+          for (int a = 0; a < 3; ++a) interior = interior && (a == axis || (end[a] >= 1 && end[a] < B));
+          const std::array<int, 4> key{b.key.x * B + end[0], b.key.y * B + end[1], b.key.z * B + end[2], axis};
+          auto position = [&] {
+            const float t = v[c0] / (v[c0] - v[c1]);
+            Eigen::Vector3f p = Eigen::Vector3f(float(key[0]), float(key[1]), float(key[2]));
+            p[axis] += t;
+            return Eigen::Vector3f(p * h);
+          };
+          if (interior) {
+            int& id = local[((end[2] * P + end[1]) * P + end[0]) * 3 + axis];
+            if (id < 0) id = int(piece->vertices.size()), piece->vertices.push_back(position());
+            ids[e] = id;
+          } else {
+            ids[e] = -int(piece->shared.size()) - 1;  // the same edge twice in a block: the map joins them
+            piece->shared.emplace_back(key, position());
           }
         }
+        for (int t = 0; kTriTable[cube][t] != -1; t += 3) {
+          // Wound counter-clockwise seen from outside (positive side) for this corner numbering.
+          piece->triangles.emplace_back(ids[kTriTable[cube][t]], ids[kTriTable[cube][t + 1]], ids[kTriTable[cube][t + 2]]);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
+  mesh_.origin = grid.origin();
+  std::vector<std::size_t> blocks;
+  for (std::size_t bi = 0; bi < grid.num_blocks(); ++bi) {
+    if (!own || own->Contains(grid.block(bi).key)) blocks.push_back(bi);
+  }
+  // Blocks meshed in parallel a batch at a time, joined in block order (the same mesh whatever the
+  // thread count).
+  constexpr std::size_t kBatch = 1024;
+  std::vector<BlockPiece> pieces(kBatch);
+  std::vector<int> shared_id;
+  for (std::size_t first = 0; first < blocks.size(); first += kBatch) {
+    const long count = long(std::min(kBatch, blocks.size() - first));
+#pragma omp parallel for schedule(dynamic, 8)
+    for (long i = 0; i < count; ++i) {
+      pieces[i] = BlockPiece();
+      MeshBlock(grid, grid.block(blocks[first + i]), &pieces[i]);
+    }
+    for (long i = 0; i < count; ++i) {
+      const BlockPiece& piece = pieces[i];
+      const int offset = int(mesh_.vertices.size());
+      mesh_.vertices.insert(mesh_.vertices.end(), piece.vertices.begin(), piece.vertices.end());
+      shared_id.clear();
+      for (const auto& [k, p] : piece.shared) {
+        const auto [it, fresh] = vertex_of_.try_emplace(EdgeKey{k[0], k[1], k[2], k[3]}, int(mesh_.vertices.size()));
+        if (fresh) mesh_.vertices.push_back(p);
+        shared_id.push_back(it->second);
+      }
+      for (const Eigen::Vector3i& t : piece.triangles) {
+        Eigen::Vector3i g;
+        for (int c = 0; c < 3; ++c) g[c] = t[c] >= 0 ? offset + t[c] : shared_id[-t[c] - 1];
+        mesh_.triangles.push_back(g);
       }
     }
   }

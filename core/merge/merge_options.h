@@ -18,10 +18,10 @@ const char* MergeMethodName(MergeMethod method);
 struct MergeOptions {
   double voxel_m = 0.02;           // metres: edge of a voxel (S's grid interval, §4.1: 0.02)
   // S's ML distance is the default, by measurement (tests/merge, scanreg-bench --section merge):
-  // it is watertight on a closed box (RMS 2.5 mm; TSDF 10.5 mm with 848 boundary edges along the
-  // box's edges) and closer on the real Stanford bunny (0.21 vs 0.33 mm input-to-surface); TSDF is
-  // closer on smooth shapes (sphere 2.8 vs 6.0 mm, plane 5.9 vs 13.1 mm; S's two-plane model
-  // 0.0135 vs 0.0138) and 4-5x faster, so large street projects merge with --method tsdf.
+  // it is watertight on a closed box (RMS 2.5 mm; TSDF 9.8 mm with 758 boundary edges along the
+  // box's edges) and closer on the real Stanford bunny (0.24 vs 0.36 mm input-to-surface); TSDF is
+  // closer on smooth shapes (sphere 2.6 vs 6.0 mm, plane 5.7 vs 13.1 mm; S's two-plane model
+  // 0.012 vs 0.019) and ~25x faster, so large street projects merge with --method tsdf.
   MergeMethod method = MergeMethod::kMaximumLikelihood;
   double sigma_m = 0.012;          // metres: range noise along the line of sight (S §3.1; W's scanner 12 mm)
   double band_m = 0.0;             // metres: field evaluated within this distance of the data; 0 = 3 voxels

@@ -30,15 +30,17 @@ struct RangeView {
   std::shared_ptr<const std::vector<float>> range;  // rows*cols, metres; < 0 where the cell is empty
   int rows = 0, cols = 0;
   bool empty() const { return angles.empty(); }
-  // Range of the scan's surface along the line of sight through x (bilinear over the 2x2 cells
-  // around it when they agree within max_jump_m, else the nearest cell); false outside the grid.
+  // Range of the scan's surface along the line of sight through x: bilinear over the 2x2 cells
+  // around it when they agree within max_jump_m, else the nearest cell when another of the four
+  // agrees with it (a lone return is no surface); false outside the grid or without a surface.
   bool RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range, float* voxel_range) const;
 };
 
 struct RangePatches {
   std::vector<RangeView> views;         // per scan (empty views for scans without angles)
   Eigen::Vector3d origin;               // world position of (0, 0, 0)
-  std::vector<Eigen::Vector3f> points;  // world minus origin
+  std::vector<Eigen::Vector3f> points;  // world minus origin, scan by scan
+  std::vector<std::size_t> scan_begin;  // per scan and one past the last: its first point
   std::vector<Patch> patches;
   std::vector<Eigen::Vector3f> scanner;  // per scan: scanner position, world minus origin
   double max_patch_radius = 0.0;         // metres: largest centroid-to-vertex distance
@@ -67,13 +69,14 @@ struct RangePatches {
 // Errors name the scan when no scan has a valid point.
 // Range images much denser than the grid are thinned first: every s-th row and column with
 // s = clamp(floor(0.5 voxel / median spacing), 1, 8) (0 voxel: no thinning).
-// What the tiles of a tiled merge share, prepared once: each scan's range view, and the bounding box
+// What the tiles of a tiled merge share, prepared once: each scan's range view and spacing, and the bounding box
 // (relative to PatchOrigin) of each 16 x 16-cell block's valid points together with the 8 rows and
 // columns after it (the farthest a triangle of the block reaches), so a tile visits only the blocks
 // that may reach it.
 struct TileInputs {
   static constexpr int kCellBlock = 16;
   std::vector<RangeView> views;
+  std::vector<double> spacing;                            // per scan: median spacing of its cells
   std::vector<std::vector<Eigen::AlignedBox3f>> blocks;  // per scan, row-major over cell blocks
 };
 TileInputs PrepareTileInputs(const std::vector<const Scan*>& scans);

@@ -1,38 +1,9 @@
 #include "core/merge/sparse_grid.h"
 
 #include <cmath>
+#include <limits>
 
 namespace scanreg::merge {
-namespace {
-
-// The blocks holding a grid point within band_m of p: lo..hi on each axis.
-void BlockRange(const Eigen::Vector3f& p, double voxel_m, double band_m, int lo[3], int hi[3]) {
-  const double inv = 1.0 / voxel_m;
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = FloorDiv(int(std::ceil((p[a] - band_m) * inv)), SparseGrid::kBlock);
-    hi[a] = FloorDiv(int(std::floor((p[a] + band_m) * inv)), SparseGrid::kBlock);
-  }
-}
-
-}  // namespace
-
-void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m) {
-  int lo[3], hi[3];
-  BlockRange(p, voxel_, band_m, lo, hi);
-  for (int z = lo[2]; z <= hi[2]; ++z) {
-    for (int y = lo[1]; y <= hi[1]; ++y) {
-      for (int x = lo[0]; x <= hi[0]; ++x) {
-        const BlockKey key{x, y, z};
-        if ((bounded_ && !bounds_.Contains(key)) || index_.count(key)) continue;
-        index_.emplace(key, blocks_.size());
-        Block& b = blocks_.emplace_back();
-        b.key = key;
-        b.distance.fill(0.0f);
-        b.weight.fill(0.0f);
-      }
-    }
-  }
-}
 
 bool BlockCounter::Add(const Eigen::Vector3f& p) {
   if (capped()) return false;
@@ -70,6 +41,33 @@ bool SparseGrid::Sample(int i, int j, int k, float* distance) const {
   return true;
 }
 
+void SparseGrid::Gather(const Block& b, Neighbourhood* out) const {
+  constexpr int B = kBlock;
+  const Block* around[27];
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        around[(dz + 1) * 9 + (dy + 1) * 3 + dx + 1] =
+            dx || dy || dz ? Find(BlockKey{b.key.x + dx, b.key.y + dy, b.key.z + dz}) : &b;
+  // Which neighbour and local coordinate each padded coordinate -1..B falls in.
+  auto side = [](int v) { return v < 0 ? 0 : (v < B ? 1 : 2); };
+  auto wrap = [](int v) { return v < 0 ? v + B : (v < B ? v : v - B); };
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int z = -1; z <= B; ++z) {
+    for (int y = -1; y <= B; ++y) {
+      for (int x = -1; x <= B; ++x) {
+        const Block* n = around[side(z) * 9 + side(y) * 3 + side(x)];
+        float v = nan;
+        if (n) {
+          const int l = Local(wrap(x), wrap(y), wrap(z));
+          if (n->weight[l] > 0.0f) v = n->distance[l];
+        }
+        (*out)[Padded(x, y, z)] = v;
+      }
+    }
+  }
+}
+
 std::size_t FixIsolatedSigns(SparseGrid& grid) {
   constexpr int B = SparseGrid::kBlock;
   const float min_abs = float(grid.voxel());
@@ -77,19 +75,20 @@ std::size_t FixIsolatedSigns(SparseGrid& grid) {
 #pragma omp parallel for schedule(dynamic, 16)
   for (long bi = 0; bi < long(grid.num_blocks()); ++bi) {
     const SparseGrid::Block& b = grid.block(bi);
+    SparseGrid::Neighbourhood around;
+    grid.Gather(b, &around);
     for (int z = 0; z < B; ++z) {
       for (int y = 0; y < B; ++y) {
         for (int x = 0; x < B; ++x) {
           const int l = SparseGrid::Local(x, y, z);
           if (b.weight[l] <= 0.0f || std::abs(b.distance[l]) < min_abs) continue;
           const bool positive = b.distance[l] > 0.0f;
-          const int i = b.key.x * B + x, j = b.key.y * B + y, k = b.key.z * B + z;
           int known = 0, other = 0;
           for (int dz = -1; dz <= 1; ++dz) {
             for (int dy = -1; dy <= 1; ++dy) {
               for (int dx = -1; dx <= 1; ++dx) {
-                float d;
-                if ((dx || dy || dz) && grid.Sample(i + dx, j + dy, k + dz, &d)) ++known, other += (d > 0.0f) != positive;
+                const float d = around[SparseGrid::Padded(x + dx, y + dy, z + dz)];
+                if ((dx || dy || dz) && !std::isnan(d)) ++known, other += (d > 0.0f) != positive;
               }
             }
           }
@@ -112,19 +111,20 @@ void SmoothField(SparseGrid& grid, int iterations) {
 #pragma omp parallel for schedule(dynamic, 16)
     for (long bi = 0; bi < long(grid.num_blocks()); ++bi) {
       const SparseGrid::Block& b = grid.block(bi);
+      SparseGrid::Neighbourhood around;
+      grid.Gather(b, &around);
       out[bi] = b.distance;
       for (int z = 0; z < B; ++z) {
         for (int y = 0; y < B; ++y) {
           for (int x = 0; x < B; ++x) {
             if (b.weight[SparseGrid::Local(x, y, z)] <= 0.0f) continue;
-            const int i = b.key.x * B + x, j = b.key.y * B + y, k = b.key.z * B + z;
             double sum = 0.0;
             int n = 0;
             for (int dz = -1; dz <= 1; ++dz) {
               for (int dy = -1; dy <= 1; ++dy) {
                 for (int dx = -1; dx <= 1; ++dx) {
-                  float d;
-                  if (grid.Sample(i + dx, j + dy, k + dz, &d)) sum += d, ++n;
+                  const float d = around[SparseGrid::Padded(x + dx, y + dy, z + dz)];
+                  if (!std::isnan(d)) sum += d, ++n;
                 }
               }
             }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 #include <unordered_set>
@@ -39,8 +40,12 @@ class SparseGrid {
   double voxel() const { return voxel_; }
 
   // Allocates (unknown) every block holding a grid point within band_m of p (p relative to origin),
-  // within the bounds when set.
-  void AllocateAround(const Eigen::Vector3f& p, double band_m);
+  // within the bounds when set, and calls visit(block index) for each of them, new or not.
+  template <class Visit>
+  void AllocateAround(const Eigen::Vector3f& p, double band_m, Visit&& visit);
+  void AllocateAround(const Eigen::Vector3f& p, double band_m) {
+    AllocateAround(p, band_m, [](std::size_t) {});
+  }
   // Blocks lo..hi (inclusive, each axis) only: a tile of a tiled merge (merge.h).
   struct Bounds {
     BlockKey lo, hi;
@@ -64,6 +69,12 @@ class SparseGrid {
   static int Local(int vx, int vy, int vz) { return (vz * kBlock + vy) * kBlock + vx; }
   // Distance and weight at a global grid point; false when unallocated or unknown.
   bool Sample(int i, int j, int k, float* distance) const;
+  // The distances around block b, at local coordinates -1..kBlock on each axis (x fastest; index
+  // with Padded), NaN where unknown: one look-up per neighbouring block instead of one per voxel.
+  static constexpr int kPadded = kBlock + 2;
+  using Neighbourhood = std::array<float, kPadded * kPadded * kPadded>;
+  static int Padded(int vx, int vy, int vz) { return ((vz + 1) * kPadded + vy + 1) * kPadded + vx + 1; }
+  void Gather(const Block& b, Neighbourhood* out) const;
   const Block* Find(const BlockKey& key) const;
 
  private:
@@ -76,6 +87,37 @@ class SparseGrid {
 };
 
 inline int FloorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// The blocks holding a grid point within band_m of p on every axis: lo..hi.
+inline void BlockRange(const Eigen::Vector3f& p, double voxel_m, double band_m, int lo[3], int hi[3]) {
+  const double inv = 1.0 / voxel_m;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = FloorDiv(int(std::ceil((p[a] - band_m) * inv)), SparseGrid::kBlock);
+    hi[a] = FloorDiv(int(std::floor((p[a] + band_m) * inv)), SparseGrid::kBlock);
+  }
+}
+
+template <class Visit>
+void SparseGrid::AllocateAround(const Eigen::Vector3f& p, double band_m, Visit&& visit) {
+  int lo[3], hi[3];
+  BlockRange(p, voxel_, band_m, lo, hi);
+  for (int z = lo[2]; z <= hi[2]; ++z) {
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        const BlockKey key{x, y, z};
+        if (bounded_ && !bounds_.Contains(key)) continue;
+        const auto [it, added] = index_.try_emplace(key, blocks_.size());
+        if (added) {
+          Block& b = blocks_.emplace_back();
+          b.key = key;
+          b.distance.fill(0.0f);
+          b.weight.fill(0.0f);
+        }
+        visit(it->second);
+      }
+    }
+  }
+}
 
 // Counts the blocks SparseGrid::AllocateAround would allocate for a set of points, with a key set
 // instead of the blocks (~1/60 of their memory), stopping at `cap`: what a merge will need, known

@@ -1,6 +1,7 @@
-// The field computed in groups of grid points (one candidate query per 4^3 group) against the
-// same formulas evaluated point by point from RangePatches::Candidates: identical magnitudes and
-// weights, on a sphere seen from six noisy views.
+// The field computed in groups of grid points (one candidate query per 4^3 group; for TSDF, one
+// gate of scans per block) against the same formulas evaluated point by point from
+// RangePatches::Candidates and a brute-force gate: identical magnitudes and weights, on a sphere
+// seen from six noisy views.
 #include "core/merge/distance_field.h"
 
 #include <gtest/gtest.h>
@@ -33,12 +34,32 @@ TEST_P(GroupedField, EqualsPerPointEvaluation) {
   NullProgress progress;
   auto patches = BuildRangePatches(ptrs, options.max_grazing_deg, cancel, options.voxel_m);
   ASSERT_TRUE(patches) << patches.error().ToString();
-  auto grid = ComputeField(*patches, options, progress, cancel);  // builds the patch hash
+  auto grid = ComputeField(*patches, options, progress, cancel);
   ASSERT_TRUE(grid) << grid.error().ToString();
+  patches->BuildHash(CandidateRadius(options));  // TSDF with range images needs none: built here for the reference
+  // TSDF's gate, brute force: the scans with a point within the band (per axis) of a grid point of the block.
+  const double band = options.Band(), h = options.voxel_m;
+  auto near_scans = [&](const BlockKey& key) {
+    std::vector<int> near;
+    const Eigen::Vector3f lo = grid->Position(key, 0, 0, 0), hi = grid->Position(key, 7, 7, 7);
+    for (std::size_t s = 0; s + 1 < patches->scan_begin.size(); ++s) {
+      for (std::size_t i = patches->scan_begin[s]; i < patches->scan_begin[s + 1]; ++i) {
+        const Eigen::Vector3f& p = patches->points[i];
+        bool reach = true;
+        for (int a = 0; a < 3; ++a) reach = reach && p[a] + band >= lo[a] - 1e-4 * h && p[a] - band <= hi[a] + 1e-4 * h;
+        if (reach) {
+          near.push_back(int(s));
+          break;
+        }
+      }
+    }
+    return near;
+  };
   std::vector<int> candidates;
   std::size_t known = 0, unknown = 0, sign_flips = 0, magnitude_differs = 0, weight_differs = 0, known_differs = 0;
   for (std::size_t bi = 0; bi < grid->num_blocks(); ++bi) {
     const SparseGrid::Block& b = grid->block(bi);
+    const std::vector<int> near = near_scans(b.key);
     for (int l = 0; l < SparseGrid::kVoxels; ++l) {
       const int x = l % 8, y = (l / 8) % 8, z = l / 64;
       const Eigen::Vector3f p = grid->Position(b.key, x, y, z);
@@ -47,7 +68,7 @@ TEST_P(GroupedField, EqualsPerPointEvaluation) {
       if (GetParam() == MergeMethod::kMaximumLikelihood) {
         w = MaximumLikelihoodDistance(*patches, p, options, candidates, &d) ? 1.0f : 0.0f;
       } else {
-        w = TsdfDistance(*patches, p, options, candidates, &d);
+        w = TsdfDistance(*patches, p, options, near.data(), near.data() + near.size(), candidates, &d);
       }
       const bool grid_known = b.weight[l] > 0.0f;
       if (grid_known != (w > 0.0f)) ++known_differs;
