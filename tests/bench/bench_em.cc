@@ -63,12 +63,6 @@ EmOptions WithVariant(EmOptions o, int k) {
   return o;
 }
 
-std::string Fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
 void TwoPlaneTable(Table& table, bool quick, bool about_x) {
   const int trials = quick ? 20 : 100;
   testing::RidgeModel model;  // width 1.0, spacing 0.025, planes tilted 30 deg

@@ -38,12 +38,6 @@ void ResetPeakMemory() {
   clear << "5";
 }
 
-std::string Fmt(const char* fmt, double a, double b = 0, double c = 0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return buf;
-}
-
 // The two planes y = 0 (x in [0, 1]) and x = 0 (y in [0, 1]), |z| <= half_height: a corner.
 double CornerDistance(const Eigen::Vector3d& p, double half_height) {
   auto rect = [&](double u, double w) {  // u along the plane in [0, 1], w across

@@ -35,12 +35,6 @@ double Median(std::vector<double> v) {
 
 double Max(const std::vector<double>& v) { return v.empty() ? NAN : *std::max_element(v.begin(), v.end()); }
 
-std::string Fmt(const char* fmt, double a, double b = 0.0, double c = 0.0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return buf;
-}
-
 int IndexOf(const std::vector<Scan>& scans, const std::string& name) {
   for (std::size_t i = 0; i < scans.size(); ++i)
     if (scans[i].name == name) return static_cast<int>(i);

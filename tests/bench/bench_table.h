@@ -2,10 +2,18 @@
 #pragma once
 
 #include <chrono>
+#include <cstdio>
 #include <string>
 #include <vector>
 
 namespace scanreg::bench {
+
+// printf-style formatting of up to three numbers, for notes.
+inline std::string Fmt(const char* fmt, double a, double b = 0, double c = 0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
 
 struct Row {
   std::string section;  // e.g. "io", "simulate"
@@ -49,5 +57,6 @@ void RunGeometricBench(Table& table, bool quick);
 void RunHardBench(Table& table, bool quick);
 void RunGeorefBench(Table& table, bool quick);
 void RunCityBench(Table& table, bool quick);
+void RunBigScansBench(Table& table, bool quick);  // bench_city.cc
 
 }  // namespace scanreg::bench
