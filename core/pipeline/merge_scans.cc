@@ -112,10 +112,15 @@ MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptio
     if (from_data > 0) options.voxel_m = std::clamp(from_data, 1e-3, std::max(1e-3, options.voxel_m));
     const std::size_t budget =
         options.memory_budget_bytes > 0 ? options.memory_budget_bytes : merge::DefaultMemoryBudget();
+    // Counted up to 500 k blocks, extrapolated past them (erring large, as CheckMergeFits does): a
+    // fine voxel on a 100-station project would otherwise count tens of millions of blocks per step.
     for (int doubling = 0; doubling < 12; ++doubling) {
-      e = merge::EstimateMerge(scans, options, 50'000'000, strides);
+      e = merge::EstimateMerge(scans, options, 500'000, strides);
       if (e.seconds <= max_seconds && e.bytes <= budget / 2) break;
-      options.voxel_m *= 2.0;
+      // Too slow: blocks shrink at most with the voxel's square, so a step of sqrt(too slow) lands
+      // at or below the voxel that fits (a few steps, not a dozen counts). Too large: doubled.
+      const double over = e.seconds / max_seconds;
+      options.voxel_m *= over > 1.0 ? std::max(1.25, std::sqrt(over)) : 2.0;
     }
   }
   if (estimate) *estimate = e;

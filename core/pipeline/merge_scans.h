@@ -30,8 +30,9 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
 
 // Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
 // data's scale — a thousandth of the scans' median extent, at least their point spacing, between
-// 1 mm and options.voxel_m — and doubles until the estimate (merge_estimate.h) takes at most
-// max_seconds and half the memory budget. *estimate: the estimate of the options returned.
+// 1 mm and options.voxel_m — and grows until the estimate (merge_estimate.h) takes at most
+// max_seconds and half the memory budget (counts past 500 k blocks extrapolated). *estimate: the
+// estimate of the options returned.
 // strides: the scans are previews (merge::EstimateMerge); the point spacing is the finest scan's.
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
                                MergeEstimate* estimate, const std::vector<int>& strides = {});
