@@ -11,10 +11,12 @@
 #include <QMessageBox>
 #include <QPushButton>
 #include <QSettings>
+#include <QSignalBlocker>
 #include <QSpinBox>
 #include <QTimer>
 #include <QVBoxLayout>
 
+#include "core/merge/merge_estimate.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/project_scans.h"
 #include "ui/app_settings.h"
@@ -117,6 +119,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   estimate_timer_ = new QTimer(this);
   estimate_timer_->setSingleShot(true);
   estimate_timer_->setInterval(300);  // after the user stops turning a spin box
+  estimator_ = new JobRunner(this);   // its own worker: the estimate neither waits for nor blocks a job
 
   auto* layout = new QVBoxLayout(this);
   layout->addLayout(form);
@@ -147,10 +150,15 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(window_->jobs(), &JobRunner::Started, this, &MergePanel::UpdateButtons);
   connect(window_->jobs(), &JobRunner::Failed, this, &MergePanel::UpdateButtons);
   connect(estimate_timer_, &QTimer::timeout, this, &MergePanel::UpdateEstimate);
+  auto counted = [this] {  // options changed while it counted: count again
+    if (estimate_again_) estimate_again_ = false, estimate_timer_->start();
+  };
+  connect(estimator_, &JobRunner::Succeeded, this, counted);
+  connect(estimator_, &JobRunner::Failed, this, counted);
   auto later = [this] { estimate_timer_->start(); };
   connect(method_, qOverload<int>(&QComboBox::currentIndexChanged), this, later);
   connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, [this, later] {
-    if (!sizing_) voxel_chosen_ = true;
+    voxel_chosen_ = true;  // the panel's own sizing sets it with signals blocked
     later();
   });
   connect(window_->document(), &ProjectDocument::Opened, this, [this] { voxel_chosen_ = false; });
@@ -171,44 +179,97 @@ void MergePanel::SetShown(bool shown) {
   if (shown_ && estimate_stale_) estimate_timer_->start();
 }
 
+namespace {
+
+// What the estimate is counted from, copied for the worker: the registered scans' previews (points,
+// validity, grid and pose only), each standing for its scan (stride^2 points a preview point).
+struct EstimateInput {
+  std::vector<Scan> scans;
+  std::vector<int> strides;
+  merge::MergeOptions options;
+  bool size_voxel = false;  // the voxel is sized to the project (pipeline::SizedMergeOptions)
+};
+
+struct EstimateOutput {
+  merge::MergeOptions options;  // with the sized voxel, to the voxel box's 0.1 mm
+  merge::MergeEstimate estimate;
+  Status fits;
+};
+
+EstimateOutput CountEstimate(const EstimateInput& in) {
+  std::vector<const Scan*> scans;
+  for (const Scan& s : in.scans) scans.push_back(&s);
+  EstimateOutput out;
+  out.options = in.options;
+  if (in.size_voxel) {  // a default that finishes in about a minute on this project
+    merge::MergeOptions base = in.options;
+    base.voxel_m = merge::MergeOptions().voxel_m;
+    const double sized = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, in.strides).voxel_m;
+    out.options.voxel_m = std::clamp(std::round(sized * 1e4) / 1e4, 1e-3, 2.0);
+  }
+  out.fits = merge::CheckMergeFits(scans, out.options, &out.estimate, in.strides);
+  return out;
+}
+
+}  // namespace
+
 void MergePanel::UpdateEstimate() {
   estimate_stale_ = !shown_;
   if (estimate_stale_) {  // what it said no longer holds
+    ++estimate_generation_;
     estimate_->clear();
     return;
   }
-  // Counted on the previews, each standing for its scan (stride^2 points a preview point).
-  std::vector<const Scan*> scans;
-  std::vector<int> strides;
+  if (estimator_->busy()) {  // the running count is of older inputs: counted again when it ends
+    ++estimate_generation_;
+    estimate_again_ = true;
+    return;
+  }
+  auto input = std::make_shared<EstimateInput>();
+  input->options = Options();
+  input->size_voxel = !voxel_chosen_;
   for (std::size_t i = 0; i < window_->previews().size() && i < window_->project().scans.size(); ++i) {
     if (!window_->project().scans[i].registered) continue;
-    scans.push_back(&window_->previews()[i].scan);
-    strides.push_back(window_->previews()[i].stride);
+    const Scan& preview = window_->previews()[i].scan;
+    Scan& copy = input->scans.emplace_back();
+    copy.name = preview.name;
+    copy.rows = preview.rows, copy.cols = preview.cols;
+    copy.points = preview.points;
+    copy.valid = preview.valid;
+    copy.world_from_scan = preview.world_from_scan;
+    input->strides.push_back(window_->previews()[i].stride);
   }
-  merge::MergeOptions options = Options();
-  merge::MergeEstimate estimate;
-  if (scans.empty() || !options.Validate()) {
+  ++estimate_generation_;
+  if (input->scans.empty() || !input->options.Validate()) {
     estimate_->clear();
     return;
   }
-  if (!voxel_chosen_) {  // a default that finishes in about a minute on this project
-    merge::MergeOptions base = options;
-    base.voxel_m = merge::MergeOptions().voxel_m;
-    options = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, strides);
-    sizing_ = true;
-    voxel_mm_->setValue(options.voxel_m * 1000.0);
-    sizing_ = false;
-    options = Options();
-  }
-  if (Status fits = merge::CheckMergeFits(scans, options, &estimate, strides); !fits) {
-    estimate_->setText(QString::fromStdString(fits.error().message));
-    estimate_->setStyleSheet("color: #b00000;");
-    return;
-  }
-  estimate_->setStyleSheet(QString());
-  estimate_->setText(tr("Estimate for %n scan(s): ", "", int(scans.size())) +
-                     QString::fromStdString(estimate.Describe()) +
-                     (voxel_chosen_ ? QString() : tr(" — voxel sized for this project (set it to choose your own)")));
+  // The last estimate stays, greyed, while the new one is counted (seconds on 100 stations).
+  estimate_->setStyleSheet("color: gray;");
+  if (estimate_->text().isEmpty()) estimate_->setText(tr("Counting what the merge will take…"));
+  const int generation = estimate_generation_;
+  estimator_->Start<EstimateOutput>(
+      tr("Merge estimate"),
+      [input](ProgressSink&, const CancelToken&) -> Expected<EstimateOutput> { return CountEstimate(*input); },
+      [this, generation, scans = input->scans.size(), sized = input->size_voxel](EstimateOutput& out) {
+        if (generation != estimate_generation_) {  // the inputs changed meanwhile: counted again
+          estimate_again_ = true;
+          return;
+        }
+        if (sized && !voxel_chosen_) {
+          const QSignalBlocker quiet(voxel_mm_);  // the estimate below is already of this voxel
+          voxel_mm_->setValue(out.options.voxel_m * 1000.0);
+        }
+        if (!out.fits) {
+          estimate_->setText(QString::fromStdString(out.fits.error().message));
+          estimate_->setStyleSheet("color: #b00000;");
+          return;
+        }
+        estimate_->setStyleSheet(QString());
+        estimate_->setText(tr("Estimate for %n scan(s): ", "", int(scans)) +
+                           QString::fromStdString(out.estimate.Describe()) +
+                           (voxel_chosen_ ? QString() : tr(" — voxel sized for this project (set it to choose your own)")));
+      });
 }
 
 merge::MergeOptions MergePanel::Options() const {

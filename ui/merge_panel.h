@@ -21,6 +21,7 @@ class QSpinBox;
 
 namespace scanreg::ui {
 
+class JobRunner;
 class MainWindow;
 class ScanScene;
 
@@ -51,8 +52,9 @@ class MergePanel : public QWidget {
   void ChooseExportFile();
   void SaveOptions() const;
   void UpdateButtons();
-  // The estimate line, from the registered scans and the options; counted only while the panel is
-  // shown (on a 100-station project the count takes seconds), else when it is next shown.
+  // The estimate line, from the registered scans and the options: counted on estimator_'s worker
+  // (seconds on a 100-station project) from a copy of the previews, only while the panel is shown
+  // (else when it is next shown); a count whose inputs changed meanwhile is discarded and redone.
   void UpdateEstimate();
   void ShowError(const QString& title, const QString& message);
 
@@ -72,12 +74,14 @@ class MergePanel : public QWidget {
   QLabel* summary_ = nullptr;
   QLabel* estimate_ = nullptr;
   QTimer* estimate_timer_ = nullptr;
+  JobRunner* estimator_ = nullptr;
+  int estimate_generation_ = 0;   // bumped whenever what the estimate depends on changes
+  bool estimate_again_ = false;   // count again when the running count ends
   bool shown_ = true;            // SetShown
   bool estimate_stale_ = false;  // asked for while hidden
   // The voxel is sized to the project (pipeline::SizedMergeOptions) until the user chooses one; a
   // new project is sized again.
   bool voxel_chosen_ = false;
-  bool sizing_ = false;  // the panel itself is setting the voxel
 };
 
 }  // namespace scanreg::ui
