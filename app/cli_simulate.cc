@@ -1,4 +1,4 @@
-// scanreg-cli simulate / demo: a simulated scan project written as PTX files and a project file.
+// scanreg-cli simulate / demo: a simulated scan project written as PTX (or E57) files and a project file.
 #include <cmath>
 #include <cstdio>
 
@@ -31,8 +31,17 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"tilt", true, false, "DEG      largest tilt of a station from upright (default 0.5; 0: levelled scans)"},
     {"utm", false, false, "       place the project at UTM-sized coordinates (E 512 km, N 5 402 km, H 100 m, grid "
                           "turned 30°): reference poses and control in that frame"},
+    {"format", true, false, "ptx|e57  scan files written (default ptx; e57: binary, valid points only, about half "
+                           "the disk)"},
     {"out", true, false, "DIR      output folder (required for simulate)"},
 };
+
+Expected<pipeline::ScanFileFormat> ReadScanFormat(const Args& args) {
+  const std::string format = args.Get("format").value_or("ptx");
+  if (format == "ptx") return pipeline::ScanFileFormat::kPtx;
+  if (format == "e57") return pipeline::ScanFileFormat::kE57;
+  return MakeError(ErrorCode::kInvalidArgument, "--format must be 'ptx' or 'e57', not '" + format + "'");
+}
 
 // Reads the simulation options shared by `simulate` and `demo`.
 Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::pair<int, int> default_size,
@@ -110,7 +119,7 @@ void PrintProjectSummary(const io::Project& project) {
 
 int RunSimulate(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("simulate", "--out DIR [options]   (writes DIR/*.ptx and DIR/project.scanreg.json)", argv,
+  auto args = ParseOrHelp("simulate", "--out DIR [options]   (writes DIR/*.ptx or *.e57 and DIR/project.scanreg.json)", argv,
                           kSimulateOptions, &code);
   if (!args) return code;
   if (!args->positional().empty()) {
@@ -120,9 +129,11 @@ int RunSimulate(const std::vector<std::string>& argv) {
   if (!out) return Fail(MakeError(ErrorCode::kInvalidArgument, "simulate: --out DIR is required"));
   auto options = ReadSimulationOptions(*args, {3000, 750}, 11);
   if (!options) return Fail(options.error());
+  auto format = ReadScanFormat(*args);
+  if (!format) return Fail(format.error());
   TerminalProgress progress;
   CancelToken cancel;
-  auto project = pipeline::WriteSimulatedProject(*options, *out, progress, cancel);
+  auto project = pipeline::WriteSimulatedProject(*options, *out, progress, cancel, *format);
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
   std::printf("reference poses are the true poses; scans are unregistered (identity header pose)\n");
@@ -141,11 +152,13 @@ int RunDemo(const std::vector<std::string>& argv) {
   const std::string out = args->Get("out").value_or("scanreg-demo");
   auto options = ReadSimulationOptions(*args, {1500, 375}, 6);
   if (!options) return Fail(options.error());
+  auto format = ReadScanFormat(*args);
+  if (!format) return Fail(format.error());
   TerminalProgress progress;
   CancelToken cancel;
   std::printf("simulating a %d-station street project (%dx%d, noise %.1f mm) in %s\n", options->stations,
               options->scanner.cols, options->scanner.rows, options->scanner.range_noise_m * 1000, out.c_str());
-  auto project = pipeline::WriteSimulatedProject(*options, out, progress, cancel);
+  auto project = pipeline::WriteSimulatedProject(*options, out, progress, cancel, *format);
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
   std::printf("\nregistering (coarse 3D RANSAC + dense ICP, loop checks)...\n");

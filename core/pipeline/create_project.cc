@@ -7,6 +7,7 @@
 #include "core/common/log.h"
 #include "core/common/output_set.h"
 #include "core/io/control_file.h"
+#include "core/io/e57_writer.h"
 #include "core/pipeline/project_edits.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
@@ -206,7 +207,7 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
 }
 
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,
-                                            ProgressSink& progress, const CancelToken& cancel) {
+                                            ProgressSink& progress, const CancelToken& cancel, ScanFileFormat format) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
@@ -220,13 +221,15 @@ Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& optio
   const Status simulated = SimulateProjectScans(
       options,
       [&](Scan&& scan, std::vector<std::uint8_t>&&) -> Status {
-        const std::filesystem::path ptx = project_path.parent_path() / (scan.name + ".ptx");
-        written.Track(ptx);
+        const bool e57 = format == ScanFileFormat::kE57;
+        const std::filesystem::path file = project_path.parent_path() / (scan.name + (e57 ? ".e57" : ".ptx"));
+        written.Track(file);
         NullProgress quiet;
-        if (Status s = io::WritePtx(ptx, {scan}, quiet, cancel); !s) return s;
+        if (Status s = e57 ? io::WriteE57(file, {scan}, quiet, cancel) : io::WritePtx(file, {scan}, quiet, cancel); !s)
+          return s;
         io::ProjectScan ps;
         ps.name = scan.name;
-        ps.path = ptx;
+        ps.path = file;
         ps.world_from_scan = scan.world_from_scan;
         ps.reference_world_from_scan = scan.reference_world_from_scan;
         project.scans.push_back(std::move(ps));

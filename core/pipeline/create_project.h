@@ -57,11 +57,18 @@ Expected<CreatedProject> CreateProject(const std::filesystem::path& project_path
 Status AppendScanFiles(io::Project& project, const std::vector<std::filesystem::path>& scan_files,
                        ProgressSink& progress, const CancelToken& cancel, std::vector<std::string>* skipped = nullptr);
 
-// Simulates a project into `dir`: one PTX per station (points in the scanner frame, identity
-// header pose, as a real unregistered project arrives) and `dir/project.scanreg.json` whose
-// reference poses are the true poses; with sphere targets also `dir/control.csv` (their measured
-// control coordinates, for `register --control`).
+enum class ScanFileFormat {
+  kPtx,  // text, every cell (the paper's format; ~40 bytes a cell)
+  kE57,  // binary, valid cells only (~20 bytes a point): large simulated campaigns on less disk
+};
+
+// Simulates a project into `dir`: one PTX or E57 file per station (points in the scanner frame,
+// identity pose, as a real unregistered project arrives), written as soon as it is simulated (one
+// scan in memory at a time), and `dir/project.scanreg.json` whose reference poses are the true
+// poses; with sphere targets also `dir/control.csv` (their measured control coordinates, for
+// `register --control`).
 Expected<io::Project> WriteSimulatedProject(const SimulatedProjectOptions& options, const std::filesystem::path& dir,
-                                            ProgressSink& progress, const CancelToken& cancel);
+                                            ProgressSink& progress, const CancelToken& cancel,
+                                            ScanFileFormat format = ScanFileFormat::kPtx);
 
 }  // namespace scanreg::pipeline

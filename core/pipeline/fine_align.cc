@@ -4,6 +4,7 @@
 
 #include "core/pipeline/register_pair.h"
 #include "core/registration/icp.h"
+#include "core/registration/voxel_filter.h"
 
 namespace scanreg::pipeline {
 
@@ -34,8 +35,10 @@ Expected<FineResult> AlignFine(const PreparedScan& parent, const PreparedScan& c
     case FineMethod::kDense: {
       const std::shared_ptr<const IcpSurface> surface = parent.Surface();
       Expected<IcpResult> icp =
-          surface ? DenseIcpSurface(*surface, child.samples, initial, options.dense_icp, quiet, cancel)
-                  : DenseIcpSamples(parent.samples, child.samples, initial, options.dense_icp, quiet, cancel);
+          surface ? DenseIcpSurface(*surface, ThinEvenly(child.samples, options.dense_icp.max_samples), initial,
+                                    options.dense_icp, quiet, cancel)  // thinned as it would: only those widened
+                  : DenseIcpSamples(ToDouble(parent.samples), ToDouble(child.samples), initial, options.dense_icp,
+                                    quiet, cancel);
       if (!icp) return icp.error();
       out.parent_from_child = icp->parent_from_child;
       out.iterations = icp->iterations;

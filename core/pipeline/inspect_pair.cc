@@ -84,11 +84,11 @@ Expected<PairInspection> InspectPair(const Scan& parent, const Scan& child, cons
     const double max_d = options.overlap_distance_m;
     std::vector<Eigen::Vector3d> child_surface;
     child_surface.reserve(prepared[1].samples.size());
-    for (const Eigen::Vector3d& p : prepared[1].samples) child_surface.push_back(pfc * p);
+    for (const Eigen::Vector3f& p : prepared[1].samples) child_surface.push_back(pfc * p.cast<double>());
     Overlay(OverlayPoints(parent, Eigen::Isometry3d::Identity(), inspect.overlay_points), child_surface, max_d,
             &out.parent_points, &out.parent_distance_m);
     if (cancel.IsCancelled()) return Cancelled();
-    Overlay(OverlayPoints(child, pfc, inspect.overlay_points), prepared[0].samples, max_d, &out.child_points,
+    Overlay(OverlayPoints(child, pfc, inspect.overlay_points), ToDouble(prepared[0].samples), max_d, &out.child_points,
             &out.child_distance_m);
   }
   out.parent_features = std::move(prepared[0].features);

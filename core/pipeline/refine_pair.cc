@@ -62,7 +62,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     // The start poses are meant to be close: a refinement that walks far away has diverged (measured
     // on the bunny: EM on a 38 % overlap pair 135 deg apart ended 45 deg off).
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& p : child.samples) centre += p;
+    for (const Eigen::Vector3f& p : child.samples) centre += p.cast<double>();
     centre /= std::max<double>(1.0, child.samples.size());
     const double moved = (link.parent_from_child * centre - initial * centre).norm();
     const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, evidence_m);
@@ -139,7 +139,7 @@ Expected<io::LinkRecord> RefinePairFromPose(const Scan& parent, const Scan& chil
     if (pts.empty())
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[k]->name + "' has no valid point; remove it");
     HoldScan(*scans[k], &prepared[k]);
-    prepared[k].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
+    prepared[k].samples = ToFloat(VoxelDownsample(pts, options.dense_icp.voxel_m));
     prepared[k].surface_options = options.dense_icp;
   }
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "refinement cancelled");

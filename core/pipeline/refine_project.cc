@@ -71,9 +71,9 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     if (pts.empty())
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + scans[i].name + "' has no valid point; remove it");
     HoldScan(scans[i], &prepared[i]);
-    prepared[i].samples = VoxelDownsample(pts, options.dense_icp.voxel_m);
+    prepared[i].samples = ToFloat(VoxelDownsample(pts, options.dense_icp.voxel_m));
     prepared[i].surface_options = options.dense_icp;
-    index[i] = std::make_unique<PointIndex>(prepared[i].samples);
+    index[i] = std::make_unique<PointIndex>(ToDouble(prepared[i].samples));
   }
   result.seconds_features = Since(t_start);
   const auto t_overlap = std::chrono::steady_clock::now();

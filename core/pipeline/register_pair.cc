@@ -99,7 +99,7 @@ Expected<std::shared_ptr<const Scan>> PreparedScan::Full() const {
 
 std::shared_ptr<const IcpSurface> PreparedScan::Surface() const {
   if (samples.empty()) return nullptr;
-  const auto build = [this] { return std::make_shared<const IcpSurface>(samples, surface_options); };
+  const auto build = [this] { return std::make_shared<const IcpSurface>(ToDouble(samples), surface_options); };
   if (store) return store->Surface(index, build);
   if (!memo) return build();
   std::call_once(memo->once, [&] { memo->surface = build(); });
@@ -122,7 +122,7 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
     const std::optional<Eigen::Vector3f> p = InterpolatePoint(scan, confidence, k.u, k.v);
     prepared->keypoint_points.push_back(p ? *p : Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
   }
-  prepared->samples = VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m);
+  prepared->samples = ToFloat(VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m));
   prepared->surface_options = options.dense_icp;
   prepared->plan = MakePlanView(prepared->geometric);
 }
@@ -156,14 +156,13 @@ int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const
 AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedScan& child,
                                     const Eigen::Isometry3d& parent_from_child, double max_distance_m) {
   AlignmentEvidence e;
-  const std::vector<Eigen::Vector3d>& parent_pts = parent.samples;
   const std::vector<Eigen::Vector3d> child_pts = ThinEvenly(child.samples, 8000);
-  if (parent_pts.size() < 8 || child_pts.empty()) return e;
+  if (parent.samples.size() < 8 || child_pts.empty()) return e;
   std::vector<Eigen::Vector3d> queries;
   queries.reserve(child_pts.size());
   for (const Eigen::Vector3d& c : child_pts) queries.push_back(parent_from_child * c);
-  const std::shared_ptr<const IcpSurface> surface = parent.Surface();
-  const std::vector<double> d = PointToSurfaceDistances(*surface->index, parent_pts, queries, max_distance_m);
+  const std::shared_ptr<const IcpSurface> surface = parent.Surface();  // its points: the parent's samples
+  const std::vector<double> d = PointToSurfaceDistances(*surface->index, surface->points, queries, max_distance_m);
   double sum_sq = 0.0;
   long overlapping = 0;
   for (double di : d) {

@@ -37,8 +37,9 @@ struct PreparedScan {
   double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
-  // Valid points voxel-downsampled at the dense ICP voxel.
-  std::vector<Eigen::Vector3d> samples;
+  // Valid points voxel-downsampled at the dense ICP voxel, scanner frame, in single precision (kept
+  // for the whole run: 12 bytes a sample; ToDouble for use).
+  std::vector<Eigen::Vector3f> samples;
   DenseIcpOptions surface_options;  // how Surface() prepares them (normals)
   // The samples prepared as a dense ICP parent and for point-to-surface distances (k-d tree and
   // normals, ~75 bytes a sample): built when first asked for, then kept by the store under its

@@ -22,6 +22,7 @@
 #include "core/pipeline/refine_pair.h"
 #include "core/pipeline/refine_project.h"
 #include "core/registration/point_index.h"
+#include "core/registration/voxel_filter.h"
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
 #include "core/pipeline/scale_defaults.h"
@@ -331,7 +332,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     Eigen::MatrixXd overlap = Eigen::MatrixXd::Zero(n, n);
     std::vector<double> radius(n, 0.0);
     for (int i = 0; i < n; ++i)
-      for (const Eigen::Vector3d& p : prepared[i].samples) radius[i] = std::max(radius[i], p.norm());
+      for (const Eigen::Vector3f& p : prepared[i].samples) radius[i] = std::max(radius[i], double(p.norm()));
     const auto near = [&](int i, int j) {
       return i != j && placed[i] && placed[j] &&
              (world[i].translation() - world[j].translation()).norm() < radius[i] + radius[j];
@@ -341,7 +342,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
       bool any = false;
       for (int j = 0; j < n && !any; ++j) any = near(i, j);
       if (!any) continue;
-      const PointIndex index(prepared[i].samples);
+      const PointIndex index(ToDouble(prepared[i].samples));
       for (int j = 0; j < n; ++j)
         if (near(i, j)) overlap(i, j) = SampleOverlap(index, prepared[j].samples, world[i].inverse() * world[j], reach);
     }

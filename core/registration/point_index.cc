@@ -93,13 +93,34 @@ std::vector<int> PointIndex::KNearest(const Eigen::Vector3d& query, int k) const
   impl_->tree->findNeighbors(result, q.data(), nanoflann::SearchParams());
   return std::vector<int>(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(result.size()));
 }
+namespace {
+
+// The samples ThinEvenly(child, 2000) would keep, without copying them.
+template <class Point>
+double Overlap(const PointIndex& parent, const std::vector<Point>& child, const Eigen::Isometry3d& parent_from_child,
+               double distance_m) {
+  constexpr int kMax = 2000;
+  if (child.empty()) return 0.0;
+  const int count = int(std::min<std::size_t>(child.size(), kMax));
+  const double stride = double(child.size()) / count;
+  int near = 0;
+  for (int i = 0; i < count; ++i) {
+    const Eigen::Vector3d p = child[static_cast<std::size_t>(i * stride)].template cast<double>();
+    near += parent.Nearest(parent_from_child * p, distance_m) >= 0;
+  }
+  return double(near) / double(count);
+}
+
+}  // namespace
+
 double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
                      const Eigen::Isometry3d& parent_from_child, double distance_m) {
-  const std::vector<Eigen::Vector3d> pts = ThinEvenly(child_samples, 2000);
-  if (pts.empty()) return 0.0;
-  int near = 0;
-  for (const Eigen::Vector3d& p : pts) near += parent.Nearest(parent_from_child * p, distance_m) >= 0;
-  return double(near) / double(pts.size());
+  return Overlap(parent, child_samples, parent_from_child, distance_m);
+}
+
+double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3f>& child_samples,
+                     const Eigen::Isometry3d& parent_from_child, double distance_m) {
+  return Overlap(parent, child_samples, parent_from_child, distance_m);
 }
 
 }  // namespace scanreg

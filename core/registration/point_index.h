@@ -33,5 +33,7 @@ class PointIndex {
 // 2,000, evenly) with a parent point within distance_m. 0 without samples.
 double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3d>& child_samples,
                      const Eigen::Isometry3d& parent_from_child, double distance_m);
+double SampleOverlap(const PointIndex& parent, const std::vector<Eigen::Vector3f>& child_samples,
+                     const Eigen::Isometry3d& parent_from_child, double distance_m);
 
 }  // namespace scanreg

@@ -70,4 +70,27 @@ std::vector<Eigen::Vector3d> ThinEvenly(std::vector<Eigen::Vector3d> points, int
   return out;
 }
 
+std::vector<Eigen::Vector3d> ThinEvenly(const std::vector<Eigen::Vector3f>& points, int max_count) {
+  if (max_count <= 0 || static_cast<int>(points.size()) <= max_count) return ToDouble(points);
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(max_count);
+  const double stride = double(points.size()) / max_count;
+  for (int i = 0; i < max_count; ++i) out.push_back(points[static_cast<std::size_t>(i * stride)].cast<double>());
+  return out;
+}
+
+std::vector<Eigen::Vector3f> ToFloat(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(points.size());
+  for (const Eigen::Vector3d& p : points) out.push_back(p.cast<float>());
+  return out;
+}
+
+std::vector<Eigen::Vector3d> ToDouble(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  for (const Eigen::Vector3f& p : points) out.push_back(p.cast<double>());
+  return out;
+}
+
 }  // namespace scanreg

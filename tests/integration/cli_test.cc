@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -50,6 +51,41 @@ TEST(CliTest, SimulateIsDeterministicAndWritesReferencePoses) {
                        .norm();
   EXPECT_GT(d, 3.0);
   EXPECT_LT(d, 7.0);
+}
+
+// simulate --format e57: the same scans as PTX (both keep the floats exactly), on less disk.
+TEST(CliTest, SimulateWritesE57ScansWithThePtxPoints) {
+  test::TempDir dir;
+  const std::string common = "simulate --stations 2 --size 400x100 --seed 3 --out ";
+  ASSERT_EQ(RunCli(common + Quote(dir / "ptx")).status, 0);
+  RunResult e57 = RunCli(common + Quote(dir / "e57") + " --format e57");
+  ASSERT_EQ(e57.status, 0) << e57.output;
+  Expected<io::Project> project = io::LoadProject(dir / "e57" / "project.scanreg.json");
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  ASSERT_EQ(project->scans.size(), 2u);
+  for (const io::ProjectScan& ps : project->scans) {
+    EXPECT_EQ(ps.path.extension(), ".e57") << ps.name;
+    const std::filesystem::path ptx = dir / "ptx" / (ps.name + ".ptx");
+    EXPECT_LT(std::filesystem::file_size(ps.path), std::filesystem::file_size(ptx)) << ps.name;
+    NullProgress progress;
+    CancelToken cancel;
+    auto a = io::ReadScanFile(ptx, progress, cancel), b = io::ReadScanFile(ps.path, progress, cancel);
+    ASSERT_TRUE(a.ok() && b.ok()) << ps.name;
+    const Scan &sa = a->front(), &sb = b->front();
+    ASSERT_EQ(sa.rows, sb.rows);
+    ASSERT_EQ(sa.cols, sb.cols);
+    ASSERT_GT(sb.CountValid(), sb.size() / 4) << ps.name;
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < sa.size(); ++i) {
+      if (sa.valid[i] != sb.valid[i]) ++differ;
+      else if (sa.valid[i] && (sa.points[i] - sb.points[i]).norm() > 1e-4f) ++differ;
+    }
+    EXPECT_EQ(differ, 0u) << ps.name;
+    EXPECT_TRUE(sb.world_from_scan.isApprox(Eigen::Isometry3d::Identity())) << "scans arrive unregistered";
+  }
+  RunResult bad = RunCli(common + Quote(dir / "bad") + " --format las");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("--format must be 'ptx' or 'e57'"), std::string::npos) << bad.output;
 }
 
 TEST(CliTest, NewInfoExportAndConvertWorkTogether) {
