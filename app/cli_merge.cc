@@ -74,12 +74,10 @@ int RunMerge(const std::vector<std::string>& argv) {
   }
   TerminalProgress progress;
   CancelToken cancel;
-  SubProgress load_progress(progress, 0.0, 0.1);
-  auto scans = pipeline::LoadProjectScans(*project, load_progress, cancel);
-  if (!scans) return Fail(scans.error());
-  std::vector<bool> use;
-  std::size_t registered = 0;
-  for (const io::ProjectScan& s : project->scans) use.push_back(s.registered), registered += s.registered;
+  std::vector<int> registered_scans;  // only these are read
+  for (std::size_t i = 0; i < project->scans.size(); ++i)
+    if (project->scans[i].registered) registered_scans.push_back(int(i));
+  const std::size_t registered = registered_scans.size();
   if (registered == 0 && !project->scans.empty()) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: no scan of " + project->file.string() +
                                                            " is registered or has an imported pose; run "
@@ -89,8 +87,11 @@ int RunMerge(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "merge: %zu of %zu scans are not registered and are left out\n",
                  project->scans.size() - registered, project->scans.size());
   }
+  SubProgress load_progress(progress, 0.0, 0.1);
+  auto scans = pipeline::LoadProjectScans(*project, load_progress, cancel, registered_scans);
+  if (!scans) return Fail(scans.error());
   SubProgress merge_progress(progress, 0.1, 1.0);
-  auto result = pipeline::MergeScans(*scans, use, options, merge_progress, cancel);
+  auto result = pipeline::MergeScans(std::move(*scans), {}, options, merge_progress, cancel);
   if (!result) return Fail(result.error());
   if (Status s = pipeline::WriteMesh(*out, result->mesh); !s) return Fail(s.error());
   if (points) {
@@ -100,13 +101,12 @@ int RunMerge(const std::vector<std::string>& argv) {
   if (options.remove_moving) {
     std::printf("left out %zu points lying in another scanner's free space (moving objects, stray returns; --keep-moving keeps them):",
                 result->moving_points);
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < use.size() && k < result->moving_per_scan.size(); ++i)
-      if (use[i]) std::printf(" %s %zu", project->scans[i].name.c_str(), result->moving_per_scan[k++]);
+    for (std::size_t k = 0; k < registered_scans.size() && k < result->moving_per_scan.size(); ++k)
+      std::printf(" %s %zu", project->scans[registered_scans[k]].name.c_str(), result->moving_per_scan[k]);
     std::printf("\n");
   }
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
-              scans->size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,
+              project->scans.size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,
               result->mesh.triangles.size(), result->mesh.vertices.size(), result->seconds, out->c_str());
   return 0;
 }

@@ -331,7 +331,7 @@ bool MergePanel::Run() {
         Expected<std::vector<Scan>> scans = pipeline::LoadProjectScans(project, read, cancel, registered);
         if (!scans) return scans.error();
         SubProgress merging(progress, 0.1, 1.0);
-        Expected<merge::MergeResult> r = pipeline::MergeScans(*scans, {}, options, merging, cancel);
+        Expected<merge::MergeResult> r = pipeline::MergeScans(std::move(*scans), {}, options, merging, cancel);
         if (!r) return r.error();
         return MergedMesh{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
                           options.voxel_m, r->moving_points, options.remove_moving};

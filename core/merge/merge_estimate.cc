@@ -21,7 +21,7 @@ constexpr double kBytesPerPatchPoint = 80.0;
 constexpr double kMeshBytesPerBlock = 2400.0;
 constexpr double kSecondsPerBlockMl = 3e-3;
 constexpr double kSecondsPerBlockTsdf = 1.4e-4;  // range-image projection gated per block
-constexpr double kBytesPerCellCopy = 17.0;  // a scan's copy with the left-out points marked
+constexpr double kBytesPerCellMask = 1.0;  // the moving-object masks (the left-out points are marked in place)
 
 struct Count {
   std::size_t points = 0, cells = 0, blocks = 0;
@@ -89,9 +89,9 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<
   const double blocks = double(e.blocks);
   const double field_blocks = c.tile_share * blocks;  // at once: one tile's
   const double patch_points = std::min(double(e.points), kPatchPointsPerBlock * field_blocks);
-  const bool copies = options.remove_moving || options.max_range_m > 0.0;
+  const bool masks = options.remove_moving;
   const double bytes = field_blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
-                       blocks * kMeshBytesPerBlock + (copies ? double(c.cells) * kBytesPerCellCopy : 0.0);
+                       blocks * kMeshBytesPerBlock + (masks ? double(c.cells) * kBytesPerCellMask : 0.0);
   e.bytes = static_cast<std::size_t>(std::min(bytes, 1e18));
   const double threads = std::max(1u, std::thread::hardware_concurrency());
   const double per_block = options.method == MergeMethod::kTsdf ? kSecondsPerBlockTsdf : kSecondsPerBlockMl;

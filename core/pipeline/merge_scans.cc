@@ -15,16 +15,17 @@
 
 namespace scanreg::pipeline {
 
-Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vector<bool>& use,
+Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel) {
   if (Status s = options.Validate(); !s) return s.error();
   if (!use.empty() && use.size() != scans.size()) {
     return MakeError(ErrorCode::kInvalidArgument, "merge: " + std::to_string(use.size()) + " selection flags for " +
                                                       std::to_string(scans.size()) + " scans");
   }
-  std::vector<const Scan*> selected;
+  std::vector<Scan*> chosen;
   for (std::size_t i = 0; i < scans.size(); ++i)
-    if (use.empty() || use[i]) selected.push_back(&scans[i]);
+    if (use.empty() || use[i]) chosen.push_back(&scans[i]);
+  const std::vector<const Scan*> selected(chosen.begin(), chosen.end());
   if (selected.empty()) {
     return MakeError(ErrorCode::kInvalidArgument,
                      scans.empty() ? "merge: the project has no scan"
@@ -43,25 +44,22 @@ Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vect
     moving = MovingPointMasks(selected, m, cancel);
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
   }
+  // The left-out points marked invalid in place (the masks were computed from all of them first).
   std::vector<std::size_t> moving_per_scan(selected.size(), 0);
-  std::vector<Scan> filtered;  // copies with the left-out points invalid, when any is
-  filtered.reserve(selected.size());
   const double max2 = options.max_range_m * options.max_range_m;
-  for (std::size_t k = 0; k < selected.size(); ++k) {
-    if (options.max_range_m <= 0.0 && moving.empty()) continue;
-    Scan copy = *selected[k];
-    for (std::size_t c = 0; c < copy.size(); ++c) {
-      if (!copy.valid[c]) continue;
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    Scan& scan = *chosen[k];
+    for (std::size_t c = 0; c < scan.size(); ++c) {
+      if (!scan.valid[c]) continue;
       if (!moving.empty() && moving[k][c]) {
-        copy.valid[c] = 0;
+        scan.valid[c] = 0;
         ++moving_per_scan[k];
-      } else if (options.max_range_m > 0.0 && copy.points[c].squaredNorm() > max2) {
-        copy.valid[c] = 0;
+      } else if (options.max_range_m > 0.0 && scan.points[c].squaredNorm() > max2) {
+        scan.valid[c] = 0;
       }
     }
-    filtered.push_back(std::move(copy));
-    selected[k] = &filtered.back();
   }
+  moving = {};
   Expected<MergeResult> result = merge::MergeScanSet(selected, options, progress, cancel);
   if (result.ok()) {
     result->moving_per_scan = moving_per_scan;

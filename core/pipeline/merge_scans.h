@@ -25,7 +25,9 @@ using merge::Mesh;
 // registered poses. Errors: bad options (naming the option), no scan selected, no valid point
 // (naming the scans), a merge estimated beyond options.memory_budget_bytes (with the voxel that
 // fits; merge_estimate.h), cancelled (kCancelled; nothing is written anywhere).
-Expected<MergeResult> MergeScans(const std::vector<Scan>& scans, const std::vector<bool>& use,
+// The scans are taken by value and the left-out points (moving objects, beyond the maximum range)
+// marked invalid in them: a caller that loaded them for the merge moves them in (no second copy).
+Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel);
 
 // Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
