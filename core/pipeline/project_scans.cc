@@ -39,7 +39,11 @@ Expected<std::vector<Scan>> LoadProjectScans(const io::Project& project, Progres
                                                  "remove the scan from the project");
     }
     if (it == files.end()) {
-      Expected<std::vector<Scan>> read = io::ReadScanFileCached(ps.path, ProjectCacheDir(project), sub, cancel);
+      // One scan asked of this file: from the cache, its record alone (a campaign in one E57).
+      int asked = 0;
+      for (const auto& [file_scan, n] : uses) asked += file_scan.first == ps.path ? n : 0;
+      Expected<std::vector<Scan>> read = io::ReadScanFileCached(ps.path, ProjectCacheDir(project), sub, cancel,
+                                                                nullptr, asked == 1 ? ps.index_in_file : -1);
       if (!read) return read.error();
       it = files.emplace(ps.path, std::move(*read)).first;
     }

@@ -93,6 +93,44 @@ TEST_F(CacheFixture, ACorruptEntryIsRebuilt) {
   EXPECT_NE(foreign.error().message.find("another file"), std::string::npos);
 }
 
+// One scan of a multi-scan file is read alone from the cache (its header and record, each checked):
+// the same scan, the others left empty; damage to another scan's record does not touch it, while a
+// whole read notices the damage and rebuilds the entry from the source.
+TEST_F(CacheFixture, OneScanOfAFileIsReadAloneAndChecked) {
+  Write(0);
+  bool hit = true;
+  const std::vector<Scan> all = Read(&hit);
+  ASSERT_EQ(all.size(), 2u);
+  auto second = ReadScanFileCached(ptx, cache, progress, cancel, &hit, 1);
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  EXPECT_TRUE(hit);
+  ASSERT_EQ(second->size(), 2u);
+  EXPECT_EQ((*second)[0].size(), 0u) << "the other scan is not read";
+  ExpectSameScans({all[1]}, {(*second)[1]});
+  // Beyond the file's scans: its scans, all empty (the caller names the missing one).
+  auto beyond = ReadScanFileCached(ptx, cache, progress, cancel, &hit, 5);
+  ASSERT_TRUE(beyond.ok());
+  EXPECT_EQ(beyond->size(), 2u);
+  // Damage inside the first scan's record (its points start well after the header).
+  const std::filesystem::path entry = ScanCachePath(cache, ptx, SourceFileKey(ptx).value());
+  {
+    std::fstream f(entry, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(700);
+    f.put('\x5a');
+  }
+  auto still = ReadScanFileCached(ptx, cache, progress, cancel, &hit, 1);
+  ASSERT_TRUE(still.ok());
+  EXPECT_TRUE(hit) << "the second scan's record is intact";
+  ExpectSameScans({all[1]}, {(*still)[1]});
+  auto first = ReadScanFileCached(ptx, cache, progress, cancel, &hit, 0);
+  ASSERT_TRUE(first.ok());
+  EXPECT_FALSE(hit) << "the damaged record is refused and the source read again";
+  ExpectSameScans({all[0]}, {(*first)[0]});
+  EXPECT_EQ((*first)[1].size(), all[1].size()) << "read from the source: every scan";
+  Read(&hit);
+  EXPECT_TRUE(hit) << "and the entry was written anew";
+}
+
 TEST_F(CacheFixture, AChangedSourceFileIsReadAgain) {
   Write(0);
   bool hit = true;
