@@ -252,10 +252,8 @@ void MergePanel::UpdateEstimate() {
       tr("Merge estimate"),
       [input](ProgressSink&, const CancelToken&) -> Expected<EstimateOutput> { return CountEstimate(*input); },
       [this, generation, scans = input->scans.size(), sized = input->size_voxel](EstimateOutput& out) {
-        if (generation != estimate_generation_) {  // the inputs changed meanwhile: counted again
-          estimate_again_ = true;
-          return;
-        }
+        // Inputs changed meanwhile: counted again when this count ends (or when the panel is shown).
+        if (generation != estimate_generation_) return;
         if (sized && !voxel_chosen_) {
           const QSignalBlocker quiet(voxel_mm_);  // the estimate below is already of this voxel
           voxel_mm_->setValue(out.options.voxel_m * 1000.0);

@@ -31,16 +31,6 @@ const SparseGrid::Block* SparseGrid::Find(const BlockKey& key) const {
   return it == index_.end() ? nullptr : &blocks_[it->second];
 }
 
-bool SparseGrid::Sample(int i, int j, int k, float* distance) const {
-  const BlockKey key{FloorDiv(i, kBlock), FloorDiv(j, kBlock), FloorDiv(k, kBlock)};
-  const Block* b = Find(key);
-  if (!b) return false;
-  const int l = Local(i - key.x * kBlock, j - key.y * kBlock, k - key.z * kBlock);
-  if (b->weight[l] <= 0.0f) return false;
-  *distance = b->distance[l];
-  return true;
-}
-
 void SparseGrid::Gather(const Block& b, Neighbourhood* out) const {
   constexpr int B = kBlock;
   const Block* around[27];

@@ -67,8 +67,6 @@ class SparseGrid {
                            float(voxel_ * (key.z * kBlock + vz)));
   }
   static int Local(int vx, int vy, int vz) { return (vz * kBlock + vy) * kBlock + vx; }
-  // Distance and weight at a global grid point; false when unallocated or unknown.
-  bool Sample(int i, int j, int k, float* distance) const;
   // The distances around block b, at local coordinates -1..kBlock on each axis (x fastest; index
   // with Padded), NaN where unknown: one look-up per neighbouring block instead of one per voxel.
   static constexpr int kPadded = kBlock + 2;
