@@ -8,39 +8,87 @@
 #include "core/merge/marching_cubes.h"
 #include "core/merge/range_patches.h"
 
+#include <string>
+
 namespace scanreg::merge {
+
+ScanSource ScansInMemory(const std::vector<const Scan*>& scans) {
+  ScanSource source;
+  source.count = int(scans.size());
+  source.get = [scans](int i) -> Expected<std::shared_ptr<const Scan>> {
+    return std::shared_ptr<const Scan>(scans[i], [](const Scan*) {});  // not owned
+  };
+  return source;
+}
 
 Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                    const CancelToken& cancel) {
   std::vector<const Scan*> ptrs;
   for (const Scan& s : scans) ptrs.push_back(&s);
-  return MergeScanSet(ptrs, options, progress, cancel);
+  return MergeScanSet(ScansInMemory(ptrs), options, progress, cancel);
+}
+
+Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const MergeOptions& options,
+                                   ProgressSink& progress, const CancelToken& cancel) {
+  return MergeScanSet(ScansInMemory(scans), options, progress, cancel);
 }
 
 namespace {
 
-// The blocks the scans' valid points reach (relative to their patch origin), widened by the band.
-SparseGrid::Bounds DataBlocks(const std::vector<const Scan*>& scans, const Eigen::Vector3d& origin, double voxel_m,
-                              double band_m) {
+// What the first pass over the scans finds: the patches' origin (the first scanner with a valid
+// point, rounded to a metre: keeps UTM offsets out of the floats), each scan's layout, and the
+// blocks their valid points reach widened by the band.
+struct FirstPass {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::vector<ScanLayout> layouts;
+  SparseGrid::Bounds data;
+  double max_patch_edge = 0.0;
+};
+
+Expected<FirstPass> ReadLayouts(const ScanSource& scans, const MergeOptions& options, const CancelToken& cancel) {
+  FirstPass out;
+  out.layouts.resize(scans.count);
+  bool have_origin = false;
+  std::size_t valid = 0;
+  std::string names;
   Eigen::AlignedBox3d box;
-  for (const Scan* s : scans) {
-    Eigen::Isometry3d shifted = s->world_from_scan;
-    shifted.translation() -= origin;
-    for (std::size_t i = 0; i < s->size(); ++i)
-      if (s->valid[i]) box.extend(shifted * s->points[i].cast<double>());
+  for (int i = 0; i < scans.count; ++i) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+    auto scan = scans.get(i);
+    if (!scan) return scan.error();
+    const Scan& s = **scan;
+    if (Status v = s.Validate(); !v) return v.error();
+    names += (names.empty() ? "" : ", ") + s.name;
+    if (!have_origin && s.CountValid() > 0) {
+      out.origin = s.world_from_scan.translation().array().round();
+      have_origin = true;
+    }
+    out.layouts[i] = LayoutScan(s, out.origin, true);
+    valid += out.layouts[i].valid;
+    out.max_patch_edge = std::max(out.max_patch_edge, MaxPatchEdge(out.layouts[i].spacing, options.voxel_m));
+    for (const Eigen::AlignedBox3f& b : out.layouts[i].blocks)
+      if (!b.isEmpty()) box.extend(b.cast<double>());
   }
-  const double block_m = voxel_m * SparseGrid::kBlock;
+  if (valid == 0) {
+    return MakeError(ErrorCode::kInvalidArgument, scans.count == 0
+                                                      ? "merge: no scan to merge (mark scans registered first)"
+                                                      : "merge: the scans to merge (" + names + ") have no valid point");
+  }
+  const double block_m = options.voxel_m * SparseGrid::kBlock;
   auto key = [&](const Eigen::Vector3d& p) {
     return BlockKey{int(std::floor(p.x() / block_m)), int(std::floor(p.y() / block_m)), int(std::floor(p.z() / block_m))};
   };
-  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(band_m + voxel_m);
-  return {key(box.min() - pad), key(box.max() + pad)};
+  const Eigen::Vector3d pad = Eigen::Vector3d::Constant(options.Band() + options.voxel_m);
+  out.data = {key(box.min() - pad), key(box.max() + pad)};
+  return out;
 }
 
-// One tile: its own blocks' cubes into `builder`, from patches and a field built around it only.
-Status MergeTile(const std::vector<const Scan*>& scans, const MergeOptions& options, const SparseGrid::Bounds& own,
-                 const SparseGrid::Bounds& data, double reach_m, const TileInputs& inputs, MeshBuilder* builder,
-                 MergeResult* result, ProgressSink& progress, const CancelToken& cancel) {
+// One tile: its own blocks' cubes into `builder`, from patches and a field built around it only —
+// of each scan, only the cells whose blocks may reach the tile.
+Status MergeTile(const ScanSource& scans, const FirstPass& first, const MergeOptions& options,
+                 const SparseGrid::Bounds& own, double reach_m, MeshBuilder* builder, MergeResult* result,
+                 ProgressSink& progress, const CancelToken& cancel) {
+  const SparseGrid::Bounds& data = first.data;
   // Halo: the cubes of `own` read one more grid point; the sign fix reads 26 neighbours; each
   // smoothing pass one more. Two blocks and a block per 8 passes keep `own`'s values exact.
   const int halo = 2 + (options.smooth_iterations + SparseGrid::kBlock - 1) / SparseGrid::kBlock;
@@ -54,8 +102,27 @@ Status MergeTile(const std::vector<const Scan*>& scans, const MergeOptions& opti
                       float(field.lo.z * block_m - reach_m)),
       Eigen::Vector3f(float((field.hi.x + 1) * block_m + reach_m), float((field.hi.y + 1) * block_m + reach_m),
                       float((field.hi.z + 1) * block_m + reach_m)));
-  auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel, options.voxel_m, &keep, &inputs);
+  std::vector<ScanPiece> pieces;
+  for (int i = 0; i < scans.count; ++i) {
+    const ScanLayout& layout = first.layouts[i];
+    int r0, r1, c0, c1;
+    if (layout.valid == 0 || !PieceWindow(layout, keep, &r0, &r1, &c0, &c1)) continue;
+    auto scan = scans.get(i);
+    if (!scan) return scan.error();
+    ScanPiece piece;
+    piece.layout = &layout;
+    piece.row0 = r0, piece.col0 = c0;
+    if (r0 == 0 && c0 == 0 && r1 == layout.rows && c1 == layout.cols) {
+      piece.cells = std::move(*scan);
+    } else {
+      piece.cells = std::make_shared<const Scan>(CropScan(**scan, r0, r1, c0, c1));
+    }
+    pieces.push_back(std::move(piece));
+  }
+  if (pieces.empty()) return Status::Ok();
+  auto patches = BuildRangePatches(pieces, first.origin, options.max_grazing_deg, cancel, options.voxel_m, &keep);
   if (!patches) return patches.error();
+  pieces.clear();  // the views hold the ranges they need
   if (patches->patches.empty()) return Status::Ok();
   result->input_points += patches->points.size();  // with the tile's margin
   result->patches += patches->patches.size();
@@ -73,28 +140,34 @@ Status MergeTile(const std::vector<const Scan*>& scans, const MergeOptions& opti
 
 }  // namespace
 
-Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const MergeOptions& options,
-                                   ProgressSink& progress, const CancelToken& cancel) {
+Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& options, ProgressSink& progress,
+                                   const CancelToken& cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = options.Validate(); !s) return s.error();
-  for (const Scan* s : scans) {
-    if (Status v = s->Validate(); !v) return v.error();
-  }
   MergeResult result;
-  result.scans = scans.size();
-  progress.Report(0.0, "meshing the range images");
-  const Eigen::Vector3d origin = PatchOrigin(scans);
-  const SparseGrid::Bounds data = DataBlocks(scans, origin, options.voxel_m, options.Band());
+  result.scans = scans.count;
+  progress.Report(0.0, "reading the scans' extents");
+  auto first = ReadLayouts(scans, options, cancel);
+  if (!first) return first.error();
+  const SparseGrid::Bounds& data = first->data;
+  progress.Report(0.02, "meshing the range images");
   const int tile = options.tile_blocks;
   const int tiles_x = tile > 0 ? (data.hi.x - data.lo.x + tile) / tile : 1;
   const int tiles_y = tile > 0 ? (data.hi.y - data.lo.y + tile) / tile : 1;
   MeshBuilder builder;
   if (tiles_x * tiles_y <= 1) {  // one piece
-    auto patches = BuildRangePatches(scans, options.max_grazing_deg, cancel, options.voxel_m);
+    std::vector<ScanPiece> pieces;
+    for (int i = 0; i < scans.count; ++i) {
+      auto scan = scans.get(i);
+      if (!scan) return scan.error();
+      pieces.push_back({std::move(*scan), 0, 0, &first->layouts[i]});
+    }
+    auto patches = BuildRangePatches(pieces, first->origin, options.max_grazing_deg, cancel, options.voxel_m);
     if (!patches) return patches.error();
+    pieces.clear();
     result.input_points = patches->points.size();
     result.patches = patches->patches.size();
-    SubProgress field_progress(progress, 0.02, 0.9);
+    SubProgress field_progress(progress, 0.04, 0.9);
     auto grid = ComputeField(*patches, options, field_progress, cancel);
     if (!grid) return grid.error();
     patches = MakeError(ErrorCode::kFailed, "freed");
@@ -106,23 +179,22 @@ Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const 
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
     progress.Report(0.9, "marching cubes");
     builder.Add(*grid);
-  } else {  // tile by tile (issue 13, item 5): memory of one tile's patches and field
-    const double reach = CandidateRadius(options) + MaxPatchEdge(scans, options.voxel_m) + options.voxel_m;
+  } else {  // tile by tile (issue 13, item 5): memory of one tile's pieces, patches and field
+    const double reach = CandidateRadius(options) + first->max_patch_edge + options.voxel_m;
     const int count = tiles_x * tiles_y;
-    const TileInputs inputs = PrepareTileInputs(scans);
     for (int t = 0; t < count; ++t) {
       if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
       const int tx = t % tiles_x, ty = t / tiles_x;
       SparseGrid::Bounds own;
       own.lo = {data.lo.x + tx * tile, data.lo.y + ty * tile, data.lo.z};
       own.hi = {std::min(data.hi.x, own.lo.x + tile - 1), std::min(data.hi.y, own.lo.y + tile - 1), data.hi.z};
-      SubProgress tile_progress(progress, 0.95 * t / count, 0.95 * (t + 1) / count);
-      if (Status s = MergeTile(scans, options, own, data, reach, inputs, &builder, &result, tile_progress, cancel); !s)
+      SubProgress tile_progress(progress, 0.02 + 0.93 * t / count, 0.02 + 0.93 * (t + 1) / count);
+      if (Status s = MergeTile(scans, *first, options, own, reach, &builder, &result, tile_progress, cancel); !s)
         return s.error();
     }
   }
   result.mesh = std::move(builder.mesh());
-  result.mesh.origin = origin;
+  result.mesh.origin = first->origin;
   if (options.remove_small_pieces)
     result.removed_triangles = RemoveSmallPieces(result.mesh, options.min_piece_fraction);
   if (result.mesh.triangles.empty()) {

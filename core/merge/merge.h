@@ -2,6 +2,8 @@
 // (maximum likelihood or TSDF), optional smoothing, Marching Cubes, small-piece removal.
 #pragma once
 
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -30,10 +32,23 @@ struct MergeResult {
   MergeEstimate estimate;            // what was expected before the merge (pipeline::MergeScans)
 };
 
+// The scans of a merge, fetched when a step needs them (issue 13, item 5: merge memory bounded by
+// a tile, not the project): each is asked for once by a first pass (its extent, spacing and blocks)
+// and then once by each tile it reaches, which keeps only the cells that reach the tile. A source
+// backed by files (pipeline::ScanStore) reads them again when evicted.
+struct ScanSource {
+  int count = 0;
+  std::function<Expected<std::shared_ptr<const Scan>>(int index)> get;
+};
+// Scans the caller holds (not copied; they must outlive the merge).
+ScanSource ScansInMemory(const std::vector<const Scan*>& scans);
+
 // All scans must be registered (world_from_scan set). Cancelled: kCancelled, no result.
+Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& options, ProgressSink& progress,
+                                   const CancelToken& cancel);
+// The same for scans in memory.
 Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                    const CancelToken& cancel);
-// The same without copying: the scans to merge, by pointer.
 Expected<MergeResult> MergeScanSet(const std::vector<const Scan*>& scans, const MergeOptions& options,
                                    ProgressSink& progress, const CancelToken& cancel);
 

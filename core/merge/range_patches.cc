@@ -120,34 +120,68 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
   return true;
 }
 
-TileInputs PrepareTileInputs(const std::vector<const Scan*>& scans) {
-  constexpr int kB = TileInputs::kCellBlock, kReach = 8;  // the largest stride
-  const Eigen::Vector3d origin = PatchOrigin(scans);
-  TileInputs out;
-  out.views.resize(scans.size());
-  out.spacing.resize(scans.size());
-  out.blocks.resize(scans.size());
-#pragma omp parallel for schedule(dynamic, 1)
-  for (long si = 0; si < long(scans.size()); ++si) {
-    const Scan& s = *scans[si];
-    const Eigen::Isometry3f t = Shifted(s, origin);
-    out.views[si] = MakeView(s, t);
-    out.spacing[si] = MedianSpacing(s);
-    const int block_rows = (s.rows + kB - 1) / kB, block_cols = (s.cols + kB - 1) / kB;
-    std::vector<Eigen::AlignedBox3f>& boxes = out.blocks[si];
-    boxes.assign(std::size_t(block_rows) * block_cols, Eigen::AlignedBox3f());  // empty boxes
-    for (int r = 0; r < s.rows; ++r) {
-      for (int c = 0; c < s.cols; ++c) {
-        const std::size_t i = s.Index(r, c);
-        if (!s.valid[i]) continue;
-        const Eigen::Vector3f p = t * s.points[i];
-        // The cell belongs to its own block and, within kReach, to the blocks before it.
-        for (int br = std::max(0, (r - kReach) / kB); br <= r / kB; ++br)
-          for (int bc = std::max(0, (c - kReach) / kB); bc <= c / kB; ++bc) boxes[std::size_t(br) * block_cols + bc].extend(p);
-      }
+ScanLayout LayoutScan(const Scan& s, const Eigen::Vector3d& origin, bool with_blocks) {
+  constexpr int kB = ScanLayout::kCellBlock, kReach = 8;  // the largest stride
+  ScanLayout out;
+  out.rows = s.rows, out.cols = s.cols;
+  out.spacing = MedianSpacing(s);
+  out.valid = s.CountValid();
+  if (!with_blocks) return out;
+  const Eigen::Isometry3f t = Shifted(s, origin);
+  const int block_cols = out.block_cols();
+  out.blocks.assign(std::size_t(out.block_rows()) * block_cols, Eigen::AlignedBox3f());  // empty boxes
+  for (int r = 0; r < s.rows; ++r) {
+    for (int c = 0; c < s.cols; ++c) {
+      const std::size_t i = s.Index(r, c);
+      if (!s.valid[i]) continue;
+      const Eigen::Vector3f p = t * s.points[i];
+      // The cell belongs to its own block and, within kReach, to the blocks before it.
+      for (int br = std::max(0, (r - kReach) / kB); br <= r / kB; ++br)
+        for (int bc = std::max(0, (c - kReach) / kB); bc <= c / kB; ++bc) out.blocks[std::size_t(br) * block_cols + bc].extend(p);
     }
   }
   return out;
+}
+
+Scan CropScan(const Scan& scan, int r0, int r1, int c0, int c1) {
+  Scan out;
+  out.name = scan.name;
+  out.rows = r1 - r0, out.cols = c1 - c0;
+  out.world_from_scan = scan.world_from_scan;
+  out.reference_world_from_scan = scan.reference_world_from_scan;
+  const std::size_t n = std::size_t(out.rows) * out.cols;
+  out.points.resize(n);
+  out.reflectance.resize(n);
+  out.valid.resize(n);
+  for (int r = r0; r < r1; ++r) {
+    const std::size_t from = scan.Index(r, c0), to = std::size_t(r - r0) * out.cols;
+    std::copy_n(scan.points.begin() + from, out.cols, out.points.begin() + to);
+    std::copy_n(scan.reflectance.begin() + from, out.cols, out.reflectance.begin() + to);
+    std::copy_n(scan.valid.begin() + from, out.cols, out.valid.begin() + to);
+  }
+  if (!scan.angles.empty()) {
+    out.angles.azimuth.assign(scan.angles.azimuth.begin() + c0, scan.angles.azimuth.begin() + c1);
+    out.angles.elevation.assign(scan.angles.elevation.begin() + r0, scan.angles.elevation.begin() + r1);
+  }
+  return out;
+}
+
+bool PieceWindow(const ScanLayout& layout, const Eigen::AlignedBox3f& keep, int* r0, int* r1, int* c0, int* c1) {
+  constexpr int kB = ScanLayout::kCellBlock;
+  const int block_rows = layout.block_rows(), block_cols = layout.block_cols();
+  int lo_r = block_rows, hi_r = -1, lo_c = block_cols, hi_c = -1;
+  for (int br = 0; br < block_rows; ++br) {
+    for (int bc = 0; bc < block_cols; ++bc) {
+      const Eigen::AlignedBox3f& b = layout.blocks[std::size_t(br) * block_cols + bc];
+      if (b.isEmpty() || !b.intersects(keep)) continue;
+      lo_r = std::min(lo_r, br), hi_r = std::max(hi_r, br);
+      lo_c = std::min(lo_c, bc), hi_c = std::max(hi_c, bc);
+    }
+  }
+  if (hi_r < 0) return false;
+  *r0 = std::max(0, lo_r - 1) * kB, *r1 = std::min(layout.rows, (hi_r + 2) * kB);
+  *c0 = std::max(0, lo_c - 1) * kB, *c1 = std::min(layout.cols, (hi_c + 2) * kB);
+  return true;
 }
 
 Eigen::Vector3d PatchOrigin(const std::vector<const Scan*>& scans) {
@@ -157,14 +191,7 @@ Eigen::Vector3d PatchOrigin(const std::vector<const Scan*>& scans) {
   return Eigen::Vector3d::Zero();
 }
 
-double MaxPatchEdge(const std::vector<const Scan*>& scans, double voxel_m) {
-  double edge = 0.0;
-  for (const Scan* s : scans) {
-    const double spacing = MedianSpacing(*s);
-    edge = std::max(edge, 8.0 * spacing * Stride(spacing, voxel_m));
-  }
-  return edge;
-}
+double MaxPatchEdge(double spacing, double voxel_m) { return 8.0 * spacing * Stride(spacing, voxel_m); }
 
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
                                        const Eigen::Vector3f& c) {
@@ -188,10 +215,7 @@ Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Ve
 }
 
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel, double voxel_m, const Eigen::AlignedBox3f* keep,
-                                         const TileInputs* tiles) {
-  RangePatches out;
-  const Eigen::Vector3d origin = PatchOrigin(scans);
+                                         const CancelToken& cancel, double voxel_m) {
   std::size_t total = 0;
   for (const Scan* s : scans) total += s->CountValid();
   if (total == 0) {
@@ -201,35 +225,57 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
                      scans.empty() ? "merge: no scan to merge (mark scans registered first)"
                                    : "merge: the scans to merge (" + names + ") have no valid point");
   }
+  const Eigen::Vector3d origin = PatchOrigin(scans);
+  std::vector<ScanLayout> layouts(scans.size());
+  std::vector<ScanPiece> pieces(scans.size());
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    layouts[i] = LayoutScan(*scans[i], origin, false);
+    pieces[i].cells = std::shared_ptr<const Scan>(scans[i], [](const Scan*) {});  // not owned
+    pieces[i].layout = &layouts[i];
+  }
+  return BuildRangePatches(pieces, origin, max_grazing_deg, cancel, voxel_m);
+}
+
+Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, const Eigen::Vector3d& origin,
+                                         double max_grazing_deg, const CancelToken& cancel, double voxel_m,
+                                         const Eigen::AlignedBox3f* keep) {
+  RangePatches out;
   out.origin = origin;
-  if (!keep) out.points.reserve(total);
+  if (!keep) {
+    std::size_t total = 0;
+    for (const ScanPiece& piece : pieces) total += piece.cells->CountValid();
+    out.points.reserve(total);
+  }
   const float cos_grazing = float(std::cos(max_grazing_deg * M_PI / 180.0));
-  std::vector<int> id;               // per cell of the current scan: its point, or -1
+  std::vector<int> id;               // per cell of the current piece: its point, or -1
   std::vector<std::size_t> touched;  // the cells given a point
-  for (std::size_t si = 0; si < scans.size(); ++si) {
+  for (std::size_t si = 0; si < pieces.size(); ++si) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled while meshing the scans");
-    const Scan& s = *scans[si];
+    const Scan& s = *pieces[si].cells;
+    const ScanLayout& layout = *pieces[si].layout;
+    const int row0 = pieces[si].row0, col0 = pieces[si].col0;
+    const int row_end = row0 + s.rows, col_end = col0 + s.cols;  // of the whole scan's grid
     const Eigen::Isometry3f t = Shifted(s, origin);
     const Eigen::Vector3f eye = t.translation();
     out.scanner.push_back(eye);
     out.scan_begin.push_back(out.points.size());
-    out.views.push_back(tiles ? tiles->views[si] : MakeView(s, t));
-    const double spacing = tiles ? tiles->spacing[si] : MedianSpacing(s);
+    out.views.push_back(MakeView(s, t));
+    const double spacing = layout.spacing;
     const int stride = Stride(spacing, voxel_m);
     const float max_edge2 = float(std::pow(8.0 * spacing * stride, 2));
     // The columns to visit in each row of cell blocks: the blocks that may reach `keep` (all
-    // without a tile). Cells are visited in row-major order either way, so a tile's points and
-    // patches keep the whole merge's order.
-    constexpr int kB = TileInputs::kCellBlock;
-    const int block_rows = (s.rows + kB - 1) / kB, block_cols = (s.cols + kB - 1) / kB;
-    std::vector<std::vector<std::pair<int, int>>> spans(block_rows);  // [first, end) columns
-    for (int br = 0; br < block_rows; ++br) {
-      for (int bc = 0; bc < block_cols; ++bc) {
-        if (keep && tiles) {
-          const Eigen::AlignedBox3f& b = tiles->blocks[si][std::size_t(br) * block_cols + bc];
+    // without a tile), within the piece. Cells are visited in row-major order either way, so a
+    // tile's points and patches keep the whole merge's order.
+    constexpr int kB = ScanLayout::kCellBlock;
+    const int block_cols = layout.block_cols();
+    std::vector<std::vector<std::pair<int, int>>> spans(layout.block_rows());  // [first, end) columns
+    for (int br = row0 / kB; br * kB < row_end; ++br) {
+      for (int bc = col0 / kB; bc * kB < col_end; ++bc) {
+        if (keep) {
+          const Eigen::AlignedBox3f& b = layout.blocks[std::size_t(br) * block_cols + bc];
           if (b.isEmpty() || !b.intersects(*keep)) continue;
         }
-        const int first = bc * kB, end = std::min(s.cols, first + kB);
+        const int first = std::max(col0, bc * kB), end = std::min(col_end, (bc + 1) * kB);
         if (!spans[br].empty() && spans[br].back().second == first) {
           spans[br].back().second = end;
         } else {
@@ -237,16 +283,19 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
         }
       }
     }
-    // Calls f(c) for every stride-th column of row r in the visited blocks.
+    // Calls f(c) for every stride-th column of row r in the visited blocks (whole-scan columns).
     auto for_columns = [&](int r, auto&& f) {
       for (const auto& [first, end] : spans[r / kB])
         for (int c = (first + stride - 1) / stride * stride; c < end; c += stride) f(c);
     };
+    // A cell of the whole scan's grid in the piece.
+    auto index = [&](int r, int c) { return std::size_t(r - row0) * s.cols + std::size_t(c - col0); };
     if (id.size() < s.size()) id.resize(s.size(), -1);
     touched.clear();
-    for (int r = 0; r < s.rows; r += stride) {
+    const int first_row = (row0 + stride - 1) / stride * stride;
+    for (int r = first_row; r < row_end; r += stride) {
       for_columns(r, [&](int c) {
-        const std::size_t i = s.Index(r, c);
+        const std::size_t i = index(r, c);
         if (!s.valid[i]) return;
         const Eigen::Vector3f p = t * s.points[i];
         if (keep && !keep->contains(p)) return;
@@ -275,11 +324,12 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
       const float r = std::max({(pa - centroid).norm(), (pb - centroid).norm(), (pc - centroid).norm()});
       out.max_patch_radius = std::max(out.max_patch_radius, double(r));
     };
-    for (int r = 0; r + stride < s.rows; r += stride) {
+    // A piece's window ends a block past the last block visited, so the cells a stride on are in it.
+    for (int r = first_row; r + stride < row_end; r += stride) {
       for_columns(r, [&](int c) {
-        if (c + stride >= s.cols) return;
-        const int p00 = id[s.Index(r, c)], p01 = id[s.Index(r, c + stride)];
-        const int p10 = id[s.Index(r + stride, c)], p11 = id[s.Index(r + stride, c + stride)];
+        if (c + stride >= col_end) return;
+        const int p00 = id[index(r, c)], p01 = id[index(r, c + stride)];
+        const int p10 = id[index(r + stride, c)], p11 = id[index(r + stride, c + stride)];
         if (p00 >= 0 && p01 >= 0 && p10 >= 0 && p11 >= 0) {
           // Split along the shorter diagonal.
           if ((out.points[p00] - out.points[p11]).squaredNorm() <= (out.points[p01] - out.points[p10]).squaredNorm()) {
@@ -292,7 +342,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
         }
       });
     }
-    for (std::size_t i : touched) id[i] = -1;  // ready for the next scan
+    for (std::size_t i : touched) id[i] = -1;  // ready for the next piece
   }
   out.scan_begin.push_back(out.points.size());
   if (out.patches.empty() && !keep) {  // a tile of a tiled merge may hold nothing

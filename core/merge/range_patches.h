@@ -64,33 +64,55 @@ struct RangePatches {
   std::vector<float> radius;  // per patch: centroid-to-vertex
 };
 
-// Triangulates the valid cells of every scan at its world_from_scan. Skips triangles with an edge
-// over 8x the scan's median grid spacing (depth edges) or seen more obliquely than max_grazing_deg.
-// Errors name the scan when no scan has a valid point.
-// Range images much denser than the grid are thinned first: every s-th row and column with
-// s = clamp(floor(0.5 voxel / median spacing), 1, 8) (0 voxel: no thinning).
-// What the tiles of a tiled merge share, prepared once: each scan's range view and spacing, and the bounding box
-// (relative to PatchOrigin) of each 16 x 16-cell block's valid points together with the 8 rows and
-// columns after it (the farthest a triangle of the block reaches), so a tile visits only the blocks
-// that may reach it.
-struct TileInputs {
+// What a tiled merge keeps of a scan between tiles, from one pass over it (issue 13, item 5): its
+// grid, its median spacing (the thinning stride), its valid points and, with blocks, the bounding
+// box (relative to the patches' origin) of each 16 x 16-cell block's valid points together with the
+// 8 rows and columns after it (the farthest a triangle of the block reaches), so that a tile reads
+// only the cells that may reach it.
+struct ScanLayout {
   static constexpr int kCellBlock = 16;
-  std::vector<RangeView> views;
-  std::vector<double> spacing;                            // per scan: median spacing of its cells
-  std::vector<std::vector<Eigen::AlignedBox3f>> blocks;  // per scan, row-major over cell blocks
+  int rows = 0, cols = 0;
+  double spacing = 0.0;
+  std::size_t valid = 0;
+  std::vector<Eigen::AlignedBox3f> blocks;  // row-major over cell blocks; empty: not computed
+  int block_rows() const { return (rows + kCellBlock - 1) / kCellBlock; }
+  int block_cols() const { return (cols + kCellBlock - 1) / kCellBlock; }
 };
-TileInputs PrepareTileInputs(const std::vector<const Scan*>& scans);
+ScanLayout LayoutScan(const Scan& scan, const Eigen::Vector3d& origin, bool with_blocks);
 
-// `keep` (relative to the origin, which depends on the scans only): points outside it are left out,
-// with the triangles they belong to (a tile of a tiled merge; `tiles` from PrepareTileInputs).
+// A window of a scan's cells — rows [row0, row0 + cells->rows), columns [col0, col0 + cells->cols)
+// of the scan `layout` describes, with their angles — as a Scan of its own: a tile's share of a
+// scan (or the whole scan, at 0, 0).
+struct ScanPiece {
+  std::shared_ptr<const Scan> cells;
+  int row0 = 0, col0 = 0;
+  const ScanLayout* layout = nullptr;
+};
+// The cells of `scan` in rows [r0, r1) and columns [c0, c1), with their angles and pose.
+Scan CropScan(const Scan& scan, int r0, int r1, int c0, int c1);
+// The cells a tile reads of a scan: the blocks that may reach `keep` (layout.blocks), widened by one
+// block each way (the neighbours a TSDF projection reads), as rows [*r0, *r1) and columns [*c0, *c1);
+// false when no block reaches it.
+bool PieceWindow(const ScanLayout& layout, const Eigen::AlignedBox3f& keep, int* r0, int* r1, int* c0, int* c1);
+
+// Triangulates the valid cells of every piece at its scan's world_from_scan, relative to `origin`.
+// Skips triangles with an edge over 8x the scan's median grid spacing (depth edges) or seen more
+// obliquely than max_grazing_deg. Range images much denser than the grid are thinned first: every
+// s-th row and column of the whole scan with s = clamp(floor(0.5 voxel / median spacing), 1, 8)
+// (0 voxel: no thinning). `keep` (relative to the origin): points outside it are left out, with
+// the triangles they belong to, and only the blocks that may reach it are visited (a tile of a
+// tiled merge: the pieces' layouts must hold blocks). Patch::scan indexes the pieces.
+Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, const Eigen::Vector3d& origin,
+                                         double max_grazing_deg, const CancelToken& cancel, double voxel_m,
+                                         const Eigen::AlignedBox3f* keep = nullptr);
+// Whole scans, around PatchOrigin(scans). Errors name the scans when none has a valid point.
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
-                                         const CancelToken& cancel, double voxel_m = 0.0,
-                                         const Eigen::AlignedBox3f* keep = nullptr, const TileInputs* tiles = nullptr);
+                                         const CancelToken& cancel, double voxel_m = 0.0);
 
 // The origin BuildRangePatches uses for these scans (the first scanner with a valid point, rounded).
 Eigen::Vector3d PatchOrigin(const std::vector<const Scan*>& scans);
-// The longest triangle edge BuildRangePatches may make for these scans at this voxel.
-double MaxPatchEdge(const std::vector<const Scan*>& scans, double voxel_m);
+// The longest triangle edge BuildRangePatches may make of a scan with this spacing at this voxel.
+double MaxPatchEdge(double spacing, double voxel_m);
 
 // Nearest point to x on triangle (a, b, c) (Ericson, Real-Time Collision Detection §5.1.5).
 Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& x, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
