@@ -8,6 +8,7 @@
 #include "core/io/output_paths.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/project_scans.h"
+#include "core/pipeline/scan_store.h"
 
 namespace scanreg::cli {
 
@@ -22,6 +23,10 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
        {"max-memory", true, false, "GB       refuse a merge estimated above this (default: 3/4 of this machine's memory)"},
+       {"memory-budget", true, false,
+        "SIZE     hold at most this much of full scans in memory (e.g. 6G, 800M); the others are read again "
+        "from the binary scan cache when a tile needs them (default: a quarter of the RAM). The mesh does not "
+        "depend on it"},
        {"keep-moving", false, false, "         keep points on moving objects (by default left out: no ghosts of traffic)"},
        {"out", true, false, "FILE     output mesh (.ply, .obj or .stl)"},
        {"points", true, false, "FILE.ply|FILE.las   also write the merged point cloud (the surface's vertices)"}},
@@ -48,6 +53,12 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto max_memory = args->GetDouble("max-memory", 0.0, 0.0, 1e6);  // GB; 0 = the default budget
   if (!max_memory) return Fail(max_memory.error());
   options.memory_budget_bytes = static_cast<std::size_t>(*max_memory * 1e9);
+  std::size_t scan_budget = pipeline::DefaultMemoryBudget();
+  if (auto text = args->Get("memory-budget")) {
+    Expected<std::size_t> parsed = pipeline::ParseMemoryBudget(*text);
+    if (!parsed) return Fail(MakeError(parsed.error().code, "merge: --memory-budget: " + parsed.error().message));
+    scan_budget = *parsed;
+  }
   options.remove_small_pieces = !args->Has("keep-pieces");
   options.remove_moving = !args->Has("keep-moving");
   const std::string method = args->Get("method").value_or(merge::MergeMethodName(options.method));
@@ -87,11 +98,7 @@ int RunMerge(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "merge: %zu of %zu scans are not registered and are left out\n",
                  project->scans.size() - registered, project->scans.size());
   }
-  SubProgress load_progress(progress, 0.0, 0.1);
-  auto scans = pipeline::LoadProjectScans(*project, load_progress, cancel, registered_scans);
-  if (!scans) return Fail(scans.error());
-  SubProgress merge_progress(progress, 0.1, 1.0);
-  auto result = pipeline::MergeScans(std::move(*scans), {}, options, merge_progress, cancel);
+  auto result = pipeline::MergeProjectScans(*project, registered_scans, options, scan_budget, progress, cancel);
   if (!result) return Fail(result.error());
   if (Status s = pipeline::WriteMesh(*out, result->mesh); !s) return Fail(s.error());
   if (points) {

@@ -18,6 +18,7 @@
 
 #include "core/merge/merge_estimate.h"
 #include "core/pipeline/merge_scans.h"
+#include "core/pipeline/scan_store.h"
 #include "core/pipeline/project_scans.h"
 #include "ui/app_settings.h"
 #include "ui/job_runner.h"
@@ -325,11 +326,9 @@ bool MergePanel::Run() {
       kMergeTitle,
       [project = window_->project(), registered = std::move(registered), options](
           ProgressSink& progress, const CancelToken& cancel) -> Expected<MergedMesh> {
-        SubProgress read(progress, 0.0, 0.1);
-        Expected<std::vector<Scan>> scans = pipeline::LoadProjectScans(project, read, cancel, registered);
-        if (!scans) return scans.error();
-        SubProgress merging(progress, 0.1, 1.0);
-        Expected<merge::MergeResult> r = pipeline::MergeScans(std::move(*scans), {}, options, merging, cancel);
+        // Scans read from their files as the merge needs them, a quarter of the RAM at most resident.
+        Expected<merge::MergeResult> r = pipeline::MergeProjectScans(project, registered, options,
+                                                                     pipeline::DefaultMemoryBudget(), progress, cancel);
         if (!r) return r.error();
         return MergedMesh{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
                           options.voxel_m, r->moving_points, options.remove_moving};

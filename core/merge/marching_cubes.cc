@@ -133,4 +133,15 @@ void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
   }
 }
 
+void MeshBuilder::Forget(const std::function<bool(int i, int j)>& done) {
+  for (auto it = vertex_of_.begin(); it != vertex_of_.end();) {
+    const EdgeKey& e = it->first;  // the cubes around it have lowest points (i - 1 .. i, j - 1 .. j)
+    if (done(e.i - 1, e.j - 1) && done(e.i, e.j - 1) && done(e.i - 1, e.j) && done(e.i, e.j)) {
+      it = vertex_of_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
 }  // namespace scanreg::merge

@@ -3,6 +3,7 @@
 // gives a watertight mesh. Cubes with an unknown corner produce nothing.
 #pragma once
 
+#include <functional>
 #include <unordered_map>
 
 #include "core/merge/mesh.h"
@@ -19,6 +20,10 @@ Mesh ExtractMesh(const SparseGrid& grid);
 class MeshBuilder {
  public:
   void Add(const SparseGrid& grid, const SparseGrid::Bounds* own = nullptr);
+  // Forgets the vertices of grid edges between cubes all meshed already — done(i, j): every cube
+  // whose lowest grid point is (i, j, any k) — so that only a tiled merge's border with the tiles
+  // to come stays in memory, not every tile border so far.
+  void Forget(const std::function<bool(int i, int j)>& done);
   Mesh& mesh() { return mesh_; }
 
  private:

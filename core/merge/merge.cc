@@ -191,6 +191,13 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
       SubProgress tile_progress(progress, 0.02 + 0.93 * t / count, 0.02 + 0.93 * (t + 1) / count);
       if (Status s = MergeTile(scans, *first, options, own, reach, &builder, &result, tile_progress, cancel); !s)
         return s.error();
+      // The cubes of tiles 0..t are meshed: their shared vertices are needed no more.
+      builder.Forget([&](int i, int j) {
+        const int bx = int(std::floor(double(i) / SparseGrid::kBlock)), by = int(std::floor(double(j) / SparseGrid::kBlock));
+        const int cx = std::clamp((bx - data.lo.x) / tile, 0, tiles_x - 1);
+        const int cy = std::clamp((by - data.lo.y) / tile, 0, tiles_y - 1);
+        return cy * tiles_x + cx <= t;
+      });
     }
   }
   result.mesh = std::move(builder.mesh());

@@ -57,27 +57,30 @@ std::vector<std::size_t> PieceSizes(const Mesh& mesh) {
 }
 
 std::size_t RemoveSmallPieces(Mesh& mesh, double min_fraction) {
+  // In place (a merged mesh may hold tens of millions of triangles: never a second copy).
   const std::vector<int> root = Pieces(mesh);
-  std::unordered_map<int, std::size_t> count;
+  std::vector<std::uint32_t> count(mesh.vertices.size(), 0);  // triangles per piece, by its root
   for (int r : root) ++count[r];
-  std::size_t largest = 0;
-  for (const auto& [r, n] : count) largest = std::max(largest, n);
+  const std::uint32_t largest = count.empty() ? 0 : *std::max_element(count.begin(), count.end());
   const double keep_from = min_fraction * double(largest);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    if (double(count[root[i]]) >= keep_from) mesh.triangles[kept++] = mesh.triangles[i];
+  const std::size_t removed = mesh.triangles.size() - kept;
+  mesh.triangles.resize(kept);
+  // The vertices still used, kept in their order.
   std::vector<int> remap(mesh.vertices.size(), -1);
-  std::vector<Eigen::Vector3f> vertices;
-  std::vector<Eigen::Vector3i> triangles;
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    if (double(count[root[i]]) < keep_from) continue;
-    Eigen::Vector3i t = mesh.triangles[i];
-    for (int k = 0; k < 3; ++k) {
-      if (remap[t[k]] < 0) remap[t[k]] = int(vertices.size()), vertices.push_back(mesh.vertices[t[k]]);
-      t[k] = remap[t[k]];
-    }
-    triangles.push_back(t);
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) remap[t[k]] = 0;
+  int used = 0;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (remap[v] < 0) continue;
+    remap[v] = used;
+    mesh.vertices[used++] = mesh.vertices[v];
   }
-  const std::size_t removed = mesh.triangles.size() - triangles.size();
-  mesh.vertices = std::move(vertices);
-  mesh.triangles = std::move(triangles);
+  mesh.vertices.resize(used);
+  for (auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) t[k] = remap[t[k]];
   return removed;
 }
 

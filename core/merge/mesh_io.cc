@@ -37,12 +37,31 @@ double LargestWorldCoordinate(const Mesh& mesh) {
   return largest;
 }
 
-Status WriteAll(const std::filesystem::path& path, const std::string& bytes) {
-  AtomicFile file(path);
-  if (Status s = file.Open(); !s) return s;
-  if (Status s = file.Write(bytes); !s) return s;
-  return file.Commit();
-}
+// An atomic output appended a few megabytes at a time: a mesh of tens of millions of triangles is
+// never held a second time as its file's bytes.
+class ChunkedOutput {
+ public:
+  explicit ChunkedOutput(const std::filesystem::path& path) : file_(path) {}
+  Status Open() { return file_.Open(); }
+  std::string& bytes() { return bytes_; }
+  // Call after each element: hands the bytes to the file once they pass a chunk.
+  Status Drain() {
+    if (bytes_.size() < kChunk) return Status::Ok();
+    Status s = file_.Write(bytes_);
+    bytes_.clear();
+    return s;
+  }
+  Status Commit() {
+    if (Status s = file_.Write(bytes_); !s) return s;
+    bytes_ = std::string();
+    return file_.Commit();
+  }
+
+ private:
+  static constexpr std::size_t kChunk = std::size_t(8) << 20;
+  AtomicFile file_;
+  std::string bytes_;
+};
 
 }  // namespace
 
@@ -52,35 +71,49 @@ double FloatRoundingError(double magnitude) {
 }
 
 Status WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh) {
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
+  ChunkedOutput output(path);
+  if (Status s = output.Open(); !s) return s;
+  std::string& out = output.bytes();
+  out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
   out += "element vertex " + std::to_string(mesh.vertices.size()) + "\n" + kDoubleVertex;
   out += "element face " + std::to_string(mesh.triangles.size()) +
          "\nproperty list uchar int vertex_indices\nend_header\n";
-  out.reserve(out.size() + mesh.vertices.size() * 24 + mesh.triangles.size() * 13);
-  for (const auto& v : mesh.vertices) AppendWorld(out, mesh.origin, v);
+  for (const auto& v : mesh.vertices) {
+    AppendWorld(out, mesh.origin, v);
+    if (Status s = output.Drain(); !s) return s;
+  }
   for (const auto& t : mesh.triangles) {
     Append(out, std::uint8_t(3));
     Append(out, std::int32_t(t[0])), Append(out, std::int32_t(t[1])), Append(out, std::int32_t(t[2]));
+    if (Status s = output.Drain(); !s) return s;
   }
-  return WriteAll(path, out);
+  return output.Commit();
 }
 
 Status WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh) {
-  std::string out = "# scanreg merged mesh: " + std::to_string(mesh.vertices.size()) + " vertices, " +
+  ChunkedOutput output(path);
+  if (Status s = output.Open(); !s) return s;
+  std::string& out = output.bytes();
+  out = "# scanreg merged mesh: " + std::to_string(mesh.vertices.size()) + " vertices, " +
                     std::to_string(mesh.triangles.size()) + " triangles, absolute coordinates (metres)\n";
   char buf[128];
   for (const auto& v : mesh.vertices) {
     const Eigen::Vector3d p = mesh.origin + v.cast<double>();
     out.append(buf, std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f\n", p.x(), p.y(), p.z()));
+    if (Status s = output.Drain(); !s) return s;
   }
   for (const auto& t : mesh.triangles) {
     out.append(buf, std::snprintf(buf, sizeof buf, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1));
+    if (Status s = output.Drain(); !s) return s;
   }
-  return WriteAll(path, out);
+  return output.Commit();
 }
 
 Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
-  std::string out(80, ' ');
+  ChunkedOutput output(path);
+  if (Status s = output.Open(); !s) return s;
+  std::string& out = output.bytes();
+  out.assign(80, ' ');
   const std::string title = "scanreg merged mesh, world coordinates (metres)";
   std::memcpy(out.data(), title.data(), title.size());
   Append(out, std::uint32_t(mesh.triangles.size()));
@@ -93,6 +126,7 @@ Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
     if (corners[0].norm() > 0) corners[0].normalize();
     for (const Eigen::Vector3f& p : corners) Append(out, p.x()), Append(out, p.y()), Append(out, p.z());
     Append(out, std::uint16_t(0));
+    if (Status s = output.Drain(); !s) return s;
   }
   const double largest = LargestWorldCoordinate(mesh);
   if (FloatRoundingError(largest) > kFloatWarningM) {
@@ -103,7 +137,7 @@ Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
                   path.string().c_str(), largest, FloatRoundingError(largest) * 1000);
     LogWarning(buf);
   }
-  return WriteAll(path, out);
+  return output.Commit();
 }
 
 Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
@@ -118,11 +152,16 @@ Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
 
 Status WritePointCloudPly(const std::filesystem::path& path, const Eigen::Vector3d& origin,
                           const std::vector<Eigen::Vector3f>& points) {
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
+  ChunkedOutput output(path);
+  if (Status s = output.Open(); !s) return s;
+  std::string& out = output.bytes();
+  out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
   out += "element vertex " + std::to_string(points.size()) + "\n" + kDoubleVertex + "end_header\n";
-  out.reserve(out.size() + points.size() * 24);
-  for (const auto& v : points) AppendWorld(out, origin, v);
-  return WriteAll(path, out);
+  for (const auto& v : points) {
+    AppendWorld(out, origin, v);
+    if (Status s = output.Drain(); !s) return s;
+  }
+  return output.Commit();
 }
 
 }  // namespace scanreg::merge

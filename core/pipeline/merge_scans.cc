@@ -1,11 +1,11 @@
 #include "core/pipeline/merge_scans.h"
 
-#include "core/pipeline/scale_defaults.h"
-
 #include "core/io/las_writer.h"
 #include "core/common/log.h"
 #include "core/io/text_parse.h"
 #include "core/pipeline/moving_points.h"
+#include "core/pipeline/scan_previews.h"
+#include "core/pipeline/scan_store.h"
 #include "core/pipeline/scale_defaults.h"
 
 #include <algorithm>
@@ -14,6 +14,44 @@
 #include "core/merge/mesh_io.h"
 
 namespace scanreg::pipeline {
+
+namespace {
+
+// Leaves out of `scan` the cells on moving objects (ascending) and the points beyond the maximum
+// range: marked invalid. Returns how many were on moving objects.
+std::size_t LeaveOut(Scan& scan, const std::vector<std::uint32_t>& moving, double max_range_m) {
+  std::size_t left = 0;
+  for (std::uint32_t c : moving) {
+    if (c < scan.size() && scan.valid[c]) scan.valid[c] = 0, ++left;
+  }
+  if (max_range_m > 0.0) {
+    const double max2 = max_range_m * max_range_m;
+    for (std::size_t c = 0; c < scan.size(); ++c)
+      if (scan.valid[c] && scan.points[c].squaredNorm() > max2) scan.valid[c] = 0;
+  }
+  return left;
+}
+
+// The cells on moving objects of each scan (none when options do not remove them, or one scan).
+Expected<std::vector<std::vector<std::uint32_t>>> MovingCells(const merge::ScanSource& scans,
+                                                              const std::vector<Eigen::Isometry3d>& poses,
+                                                              const MergeOptions& options, ProgressSink& progress,
+                                                              const CancelToken& cancel) {
+  if (!options.remove_moving || scans.count < 2) return std::vector<std::vector<std::uint32_t>>(scans.count);
+  progress.Report(0.0, "finding moving objects");
+  MovingPointOptions m;
+  m.margin_m = options.MovingMargin();
+  return MovingPointCells(scans, poses, m, cancel);
+}
+
+Status CheckSelection(std::size_t selected, std::size_t scans) {
+  if (selected > 0) return Status::Ok();
+  return MakeError(ErrorCode::kInvalidArgument, scans == 0
+                                                    ? "merge: the project has no scan"
+                                                    : "merge: no registered scan to merge (register the project first)");
+}
+
+}  // namespace
 
 Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel) {
@@ -26,41 +64,83 @@ Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool
   for (std::size_t i = 0; i < scans.size(); ++i)
     if (use.empty() || use[i]) chosen.push_back(&scans[i]);
   const std::vector<const Scan*> selected(chosen.begin(), chosen.end());
-  if (selected.empty()) {
-    return MakeError(ErrorCode::kInvalidArgument,
-                     scans.empty() ? "merge: the project has no scan"
-                                   : "merge: no registered scan to merge (register the project first)");
-  }
+  if (Status s = CheckSelection(selected.size(), scans.size()); !s) return s.error();
   // Refused before any work when it would not fit in memory (issue 16); the estimate is logged.
   MergeEstimate estimate;
   if (Status fits = merge::CheckMergeFits(selected, options, &estimate); !fits) return fits.error();
   LogInfo("merge of " + std::to_string(selected.size()) + " scans: " + estimate.Describe());
-  // Points left out: beyond the maximum range, and on moving objects (seen through by another scan).
-  std::vector<std::vector<std::uint8_t>> moving;
-  if (options.remove_moving && selected.size() > 1) {
-    progress.Report(0.0, "finding moving objects");
-    MovingPointOptions m;
-    m.margin_m = options.MovingMargin();
-    moving = MovingPointMasks(selected, m, cancel);
-    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
-  }
-  // The left-out points marked invalid in place (the masks were computed from all of them first).
+  // Points left out: on moving objects (seen through by another scan), and beyond the maximum range,
+  // marked invalid in place (the moving ones were found from all points first).
+  std::vector<Eigen::Isometry3d> poses;
+  for (const Scan* s : selected) poses.push_back(s->world_from_scan);
+  auto moving = MovingCells(merge::ScansInMemory(selected), poses, options, progress, cancel);
+  if (!moving) return moving.error();
   std::vector<std::size_t> moving_per_scan(selected.size(), 0);
-  const double max2 = options.max_range_m * options.max_range_m;
-  for (std::size_t k = 0; k < chosen.size(); ++k) {
-    Scan& scan = *chosen[k];
-    for (std::size_t c = 0; c < scan.size(); ++c) {
-      if (!scan.valid[c]) continue;
-      if (!moving.empty() && moving[k][c]) {
-        scan.valid[c] = 0;
-        ++moving_per_scan[k];
-      } else if (options.max_range_m > 0.0 && scan.points[c].squaredNorm() > max2) {
-        scan.valid[c] = 0;
-      }
-    }
-  }
-  moving = {};
+  for (std::size_t k = 0; k < chosen.size(); ++k)
+    moving_per_scan[k] = LeaveOut(*chosen[k], (*moving)[k], options.max_range_m);
+  moving = std::vector<std::vector<std::uint32_t>>();
   Expected<MergeResult> result = merge::MergeScanSet(selected, options, progress, cancel);
+  if (result.ok()) {
+    result->moving_per_scan = moving_per_scan;
+    result->estimate = estimate;
+    for (std::size_t n : moving_per_scan) result->moving_points += n;
+  }
+  return result;
+}
+
+Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::vector<int>& which,
+                                        const MergeOptions& options, std::size_t scan_budget_bytes,
+                                        ProgressSink& progress, const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  if (Status s = CheckSelection(which.size(), project.scans.size()); !s) return s.error();
+  for (int i : which) {
+    if (i < 0 || std::size_t(i) >= project.scans.size())
+      return MakeError(ErrorCode::kInvalidArgument, "merge: scan number " + std::to_string(i) + " is not in the project");
+  }
+  // The estimate from the previews (the preview cache: no full read when it holds them).
+  MergeEstimate estimate;
+  {
+    SubProgress preview_progress(progress, 0.0, 0.05);
+    auto previews = LoadScanPreviews(project, PreviewCellsPerScan(which.size()), preview_progress, cancel, which);
+    if (!previews) return previews.error();
+    std::vector<const Scan*> scans;
+    std::vector<int> strides;
+    for (const ScanPreview& p : *previews) scans.push_back(&p.scan), strides.push_back(p.stride);
+    if (Status fits = merge::CheckMergeFits(scans, options, &estimate, strides); !fits) return fits.error();
+  }
+  LogInfo("merge of " + std::to_string(which.size()) + " scans: " + estimate.Describe());
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i : which) poses.push_back(project.scans[i].world_from_scan);
+  const ScanStore::Reader read_file = ProjectScanReader(project);
+  // Moving objects from the scans as read (each with its observers, under the budget).
+  Expected<std::vector<std::vector<std::uint32_t>>> moving = std::vector<std::vector<std::uint32_t>>(which.size());
+  if (options.remove_moving && which.size() > 1) {
+    ScanStore raw = ProjectScanStore(project, scan_budget_bytes);
+    merge::ScanSource source{int(which.size()), [&](int k) { return raw.Get(which[k]); }};
+    SubProgress moving_progress(progress, 0.05, 0.25);
+    moving = MovingCells(source, poses, options, moving_progress, cancel);
+    if (!moving) return moving.error();
+  }
+  // The scans as merged: their left-out points marked when read.
+  std::vector<Scan> heads(which.size());
+  for (std::size_t k = 0; k < which.size(); ++k) {
+    heads[k].name = project.scans[which[k]].name;
+    heads[k].world_from_scan = project.scans[which[k]].world_from_scan;
+    heads[k].reference_world_from_scan = project.scans[which[k]].reference_world_from_scan;
+  }
+  std::vector<std::size_t> moving_per_scan(which.size(), 0);
+  ScanStore merged(
+      std::move(heads),
+      [&](int k) -> Expected<Scan> {
+        Expected<Scan> scan = read_file(which[k]);
+        if (!scan) return scan.error();
+        moving_per_scan[k] = LeaveOut(*scan, (*moving)[k], options.max_range_m);
+        return scan;
+      },
+      scan_budget_bytes);
+  merge::ScanSource source{int(which.size()), [&](int k) { return merged.Get(k); }};
+  SubProgress merge_progress(progress, 0.25, 1.0);
+  Expected<MergeResult> result = merge::MergeScanSet(source, options, merge_progress, cancel);
   if (result.ok()) {
     result->moving_per_scan = moving_per_scan;
     result->estimate = estimate;

@@ -8,6 +8,7 @@
 #include "core/common/expected.h"
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
+#include "core/io/project.h"
 #include "core/merge/merge.h"
 #include "core/merge/merge_estimate.h"
 #include "core/merge/merge_options.h"
@@ -29,6 +30,16 @@ using merge::Mesh;
 // marked invalid in them: a caller that loaded them for the merge moves them in (no second copy).
 Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool>& use,
                                  const MergeOptions& options, ProgressSink& progress, const CancelToken& cancel);
+
+// The project's scans `which` (by index; registered) merged without holding them all (issue 13:
+// merge memory bounded whatever the project's size): each is read from its file (the binary scan
+// cache) when a step needs it, at most scan_budget_bytes of them resident — the estimate from the
+// previews, the moving-object test scan by scan against its observers, a first pass for the
+// extents, then each tile the cells that reach it. The same mesh as MergeScans on the loaded scans.
+// Errors as MergeScans's, and a scan that cannot be read (naming it and its file).
+Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::vector<int>& which,
+                                        const MergeOptions& options, std::size_t scan_budget_bytes,
+                                        ProgressSink& progress, const CancelToken& cancel);
 
 // Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
 // data's scale — a thousandth of the scans' median extent, at least their point spacing, between

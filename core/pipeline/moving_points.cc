@@ -7,26 +7,36 @@
 
 namespace scanreg::pipeline {
 
-std::vector<std::vector<std::uint8_t>> MovingPointMasks(const std::vector<const Scan*>& scans,
-                                                        const MovingPointOptions& options, const CancelToken& cancel) {
-  std::vector<std::vector<std::uint8_t>> masks(scans.size());
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    if (cancel.IsCancelled()) break;
-    const Scan& scan = *scans[i];
-    masks[i].assign(scan.size(), 0);
-    std::vector<std::size_t> others;
-    for (std::size_t j = 0; j < scans.size(); ++j)
-      if (j != i && !scans[j]->angles.empty()) others.push_back(j);
-    const Eigen::Vector3d at = scan.world_from_scan.translation();
-    auto distance = [&](std::size_t j) { return (scans[j]->world_from_scan.translation() - at).norm(); };
-    std::sort(others.begin(), others.end(), [&](std::size_t a, std::size_t b) { return distance(a) < distance(b); });
-    if (others.size() > static_cast<std::size_t>(std::max(options.observers, 0))) others.resize(options.observers);
-    for (std::size_t j : others) {
-      const Eigen::Isometry3d observer_from_scan = scans[j]->world_from_scan.inverse() * scan.world_from_scan;
-      MarkFreeSpacePoints(*scans[j], scan, observer_from_scan, options.margin_m, &masks[i]);
+Expected<std::vector<std::vector<std::uint32_t>>> MovingPointCells(const merge::ScanSource& scans,
+                                                                   const std::vector<Eigen::Isometry3d>& poses,
+                                                                   const MovingPointOptions& options,
+                                                                   const CancelToken& cancel) {
+  std::vector<std::vector<std::uint32_t>> cells(scans.count);
+  std::vector<std::uint8_t> mask;
+  for (int i = 0; i < scans.count; ++i) {
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled while finding moving objects");
+    auto scan = scans.get(i);
+    if (!scan) return scan.error();
+    mask.assign((*scan)->size(), 0);
+    std::vector<int> others;
+    for (int j = 0; j < scans.count; ++j)
+      if (j != i) others.push_back(j);
+    const Eigen::Vector3d at = poses[i].translation();
+    auto distance = [&](int j) { return (poses[j].translation() - at).norm(); };
+    std::stable_sort(others.begin(), others.end(), [&](int a, int b) { return distance(a) < distance(b); });
+    int observed = 0;  // the nearest observers with a panoramic grid, as MovingPointMasks
+    for (std::size_t k = 0; k < others.size() && observed < options.observers; ++k) {
+      auto observer = scans.get(others[k]);
+      if (!observer) return observer.error();
+      if ((*observer)->angles.empty()) continue;
+      ++observed;
+      const Eigen::Isometry3d observer_from_scan = (*observer)->world_from_scan.inverse() * (*scan)->world_from_scan;
+      MarkFreeSpacePoints(**observer, **scan, observer_from_scan, options.margin_m, &mask);
     }
+    for (std::size_t c = 0; c < mask.size(); ++c)
+      if (mask[c]) cells[i].push_back(std::uint32_t(c));
   }
-  return masks;
+  return cells;
 }
 
 }  // namespace scanreg::pipeline

@@ -7,8 +7,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/common/expected.h"
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
+#include "core/merge/merge.h"
 
 namespace scanreg::pipeline {
 
@@ -17,10 +19,15 @@ struct MovingPointOptions {
   int observers = 8;      // each scan is tested against this many nearest other stations
 };
 
-// For each scan (world_from_scan = its registered pose) a mask over its cells: 1 where the point lies
-// in the free space of one of its nearest other scans. Scans without a panoramic grid (no angles)
-// can be tested but do not observe. Cancelled: the masks computed so far (the rest empty).
-std::vector<std::vector<std::uint8_t>> MovingPointMasks(const std::vector<const Scan*>& scans,
-                                                        const MovingPointOptions& options, const CancelToken& cancel);
+// Per scan (its world_from_scan the registered pose), its cells whose point lies in the free space
+// of one of its nearest other scans, ascending. Scans without a panoramic grid (no angles) can be
+// tested but do not observe. Scan by scan, for scans read when needed (issue 13: a project larger
+// than memory): scan i and its observers are asked of `scans` in turn (poses[i]: scan i's pose, to
+// choose the observers before reading them). Errors: a scan that cannot be read; cancelled
+// (kCancelled).
+Expected<std::vector<std::vector<std::uint32_t>>> MovingPointCells(const merge::ScanSource& scans,
+                                                                   const std::vector<Eigen::Isometry3d>& poses,
+                                                                   const MovingPointOptions& options,
+                                                                   const CancelToken& cancel);
 
 }  // namespace scanreg::pipeline

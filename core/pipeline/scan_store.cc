@@ -172,13 +172,16 @@ ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes)
     head.reference_world_from_scan = ps.reference_world_from_scan;
     heads.push_back(std::move(head));
   }
-  auto read = [project](int index) -> Expected<Scan> {
+  return ScanStore(std::move(heads), ProjectScanReader(project), budget_bytes);
+}
+
+ScanStore::Reader ProjectScanReader(const io::Project& project) {
+  return [project](int index) -> Expected<Scan> {
     NullProgress quiet;
     Expected<std::vector<Scan>> one = LoadProjectScans(project, quiet, CancelToken(), {index});
     if (!one) return one.error();
     return std::move(one->front());
   };
-  return ScanStore(std::move(heads), read, budget_bytes);
 }
 
 }  // namespace scanreg::pipeline

@@ -7,10 +7,13 @@
 #include <cmath>
 
 #include "core/pipeline/merge_scans.h"
+#include "core/pipeline/create_project.h"
 #include "core/pipeline/moving_points.h"
+#include "core/pipeline/project_scans.h"
 #include "core/registration/point_index.h"
 #include "core/registration/visibility.h"
 #include "core/simulate/project_sim.h"
+#include "tests/support/test_paths.h"
 
 namespace scanreg::pipeline {
 namespace {
@@ -110,8 +113,16 @@ TEST(MovingObjects, MasksFindTheMovingPoints) {
   }
   MovingPointOptions options;
   options.margin_m = 0.1;
-  const std::vector<std::vector<std::uint8_t>> masks = MovingPointMasks(scans, options, CancelToken());
-  ASSERT_EQ(masks.size(), 3u);
+  std::vector<Eigen::Isometry3d> poses;
+  for (const Scan* s : scans) poses.push_back(s->world_from_scan);
+  const auto cells = MovingPointCells(merge::ScansInMemory(scans), poses, options, CancelToken());
+  ASSERT_TRUE(cells) << cells.error().ToString();
+  ASSERT_EQ(cells->size(), 3u);
+  std::vector<std::vector<std::uint8_t>> masks(3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    masks[i].assign(sim.scans[i].size(), 0);
+    for (std::uint32_t c : (*cells)[i]) masks[i][c] = 1;
+  }
   long moving = 0, found = 0, marked = 0, marked_moving = 0, near = 0, near_found = 0;
   for (std::size_t i = 0; i < 3; ++i) {
     const Scan& s = sim.scans[i];
@@ -174,6 +185,55 @@ TEST(MovingObjects, MergeLeavesOutTheTraffic) {
   EXPECT_GT(kept_on, 100) << "the traffic is in the mesh when kept";
   EXPECT_LT(removed_on, kept_on / 4) << "most of it is gone when left out";
   EXPECT_GT(removed_total, kept_total * 8 / 10) << "the static street stays";
+}
+
+// Issue 13: a project merged from its files (MergeProjectScans: each scan read when a step needs it)
+// gives the same mesh and leaves out the same moving points whether every scan stays in memory or
+// each is read again whenever a step asks for it, and the same as merging the loaded scans — here
+// tiled (4-block tiles) with traffic and a maximum range, so that every step reads scans.
+TEST(MovingObjects, AProjectMergedFromItsFilesIsTheSameWhateverTheScanBudget) {
+  SimulatedProjectOptions o;
+  o.stations = 3;
+  o.spacing_m = 6.0;
+  o.scanner.cols = 600;
+  o.scanner.rows = 150;
+  o.scene.kind = SceneOptions::Kind::kStreet;
+  o.traffic.vehicles = 6;
+  o.traffic.pedestrians = 12;
+  o.seed = o.scanner.seed = o.scene.seed = 31;
+  test::TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<io::Project> project = WriteSimulatedProject(o, dir / "p", progress, cancel);
+  ASSERT_TRUE(project.ok()) << project.error().ToString();
+  for (io::ProjectScan& s : project->scans) {
+    ASSERT_TRUE(s.reference_world_from_scan.has_value());
+    s.world_from_scan = *s.reference_world_from_scan;
+    s.registered = true;
+  }
+  MergeOptions options;
+  options.method = MergeMethod::kTsdf;
+  options.voxel_m = 0.1;
+  options.max_range_m = 20.0;
+  options.tile_blocks = 4;
+  const std::vector<int> all{0, 1, 2};
+  Expected<MergeResult> tight = MergeProjectScans(*project, all, options, 1, progress, cancel);  // nothing stays
+  Expected<MergeResult> roomy = MergeProjectScans(*project, all, options, std::size_t(1) << 30, progress, cancel);
+  Expected<std::vector<Scan>> loaded = LoadProjectScans(*project, progress, cancel);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().ToString();
+  Expected<MergeResult> in_memory = MergeScans(std::move(*loaded), {}, options, progress, cancel);
+  for (const Expected<MergeResult>* r : {&tight, &roomy, &in_memory}) ASSERT_TRUE(r->ok()) << (*r).error().ToString();
+  EXPECT_GT(tight->moving_points, 500u) << "the traffic was found and left out";
+  EXPECT_GT(tight->mesh.triangles.size(), 10000u);
+  for (const Expected<MergeResult>* r : {&roomy, &in_memory}) {
+    EXPECT_EQ((*r)->moving_per_scan, tight->moving_per_scan);
+    EXPECT_EQ((*r)->input_points, tight->input_points);
+    EXPECT_TRUE((*r)->mesh.origin == tight->mesh.origin);
+    ASSERT_EQ((*r)->mesh.vertices.size(), tight->mesh.vertices.size());
+    ASSERT_EQ((*r)->mesh.triangles.size(), tight->mesh.triangles.size());
+    EXPECT_TRUE((*r)->mesh.vertices == tight->mesh.vertices);
+    EXPECT_TRUE((*r)->mesh.triangles == tight->mesh.triangles);
+  }
 }
 
 }  // namespace
