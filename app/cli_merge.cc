@@ -98,12 +98,18 @@ int RunMerge(const std::vector<std::string>& argv) {
     std::fprintf(stderr, "merge: %zu of %zu scans are not registered and are left out\n",
                  project->scans.size() - registered, project->scans.size());
   }
-  auto result = pipeline::MergeProjectScans(*project, registered_scans, options, scan_budget, progress, cancel);
+  // The mesh goes to temporary files beside the output as the tiles are meshed, and is streamed
+  // from there into the outputs: the merge's memory does not grow with the mesh.
+  auto spill = merge::MeshSpill::Create(std::filesystem::absolute(*out).parent_path());
+  if (!spill) return Fail(spill.error());
+  auto result =
+      pipeline::MergeProjectScans(*project, registered_scans, options, scan_budget, progress, cancel, spill->get());
   if (!result) return Fail(result.error());
-  if (Status s = pipeline::WriteMesh(*out, result->mesh); !s) return Fail(s.error());
+  const merge::MeshSpill& mesh = **spill;
+  if (Status s = pipeline::WriteMesh(*out, mesh); !s) return Fail(s.error());
   if (points) {
-    if (Status s = pipeline::WritePoints(*points, result->mesh); !s) return Fail(s.error());
-    std::printf("merged point cloud: %zu points -> %s\n", result->mesh.vertices.size(), points->c_str());
+    if (Status s = pipeline::WritePoints(*points, mesh); !s) return Fail(s.error());
+    std::printf("merged point cloud: %zu points -> %s\n", mesh.vertex_count(), points->c_str());
   }
   if (options.remove_moving) {
     std::printf("left out %zu points lying in another scanner's free space (moving objects, stray returns; --keep-moving keeps them):",
@@ -114,7 +120,7 @@ int RunMerge(const std::vector<std::string>& argv) {
   }
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
               project->scans.size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,
-              result->mesh.triangles.size(), result->mesh.vertices.size(), result->seconds, out->c_str());
+              mesh.triangle_count(), mesh.vertex_count(), result->seconds, out->c_str());
   return 0;
 }
 

@@ -116,11 +116,12 @@ void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
     }
     for (long i = 0; i < count; ++i) {
       const BlockPiece& piece = pieces[i];
-      const int offset = int(mesh_.vertices.size());
+      const int offset = flushed_ + int(mesh_.vertices.size());
       mesh_.vertices.insert(mesh_.vertices.end(), piece.vertices.begin(), piece.vertices.end());
       shared_id.clear();
       for (const auto& [k, p] : piece.shared) {
-        const auto [it, fresh] = vertex_of_.try_emplace(EdgeKey{k[0], k[1], k[2], k[3]}, int(mesh_.vertices.size()));
+        const auto [it, fresh] = vertex_of_.try_emplace(EdgeKey{k[0], k[1], k[2], k[3]},
+                                                        flushed_ + int(mesh_.vertices.size()));
         if (fresh) mesh_.vertices.push_back(p);
         shared_id.push_back(it->second);
       }
@@ -131,6 +132,14 @@ void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
       }
     }
   }
+}
+
+Mesh MeshBuilder::Take() {
+  Mesh taken = std::move(mesh_);
+  mesh_ = Mesh();
+  mesh_.origin = taken.origin;
+  flushed_ += int(taken.vertices.size());
+  return taken;
 }
 
 void MeshBuilder::Forget(const std::function<bool(int i, int j)>& done) {

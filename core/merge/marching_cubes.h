@@ -25,6 +25,9 @@ class MeshBuilder {
   // to come stays in memory, not every tile border so far.
   void Forget(const std::function<bool(int i, int j)>& done);
   Mesh& mesh() { return mesh_; }
+  // The vertices and triangles added since the last Take (triangles index all vertices added so far,
+  // taken or not: a caller that streams the mesh out appends the pieces in order).
+  Mesh Take();
 
  private:
   struct EdgeKey {
@@ -37,6 +40,7 @@ class MeshBuilder {
     }
   };
   Mesh mesh_;
+  int flushed_ = 0;  // vertices taken
   std::unordered_map<EdgeKey, int, EdgeKeyHash> vertex_of_;
 };
 

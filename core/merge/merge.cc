@@ -141,7 +141,7 @@ Status MergeTile(const ScanSource& scans, const FirstPass& first, const MergeOpt
 }  // namespace
 
 Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& options, ProgressSink& progress,
-                                   const CancelToken& cancel) {
+                                   const CancelToken& cancel, MeshSpill* spill) {
   const auto t0 = std::chrono::steady_clock::now();
   if (Status s = options.Validate(); !s) return s.error();
   MergeResult result;
@@ -155,6 +155,11 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
   const int tiles_x = tile > 0 ? (data.hi.x - data.lo.x + tile) / tile : 1;
   const int tiles_y = tile > 0 ? (data.hi.y - data.lo.y + tile) / tile : 1;
   MeshBuilder builder;
+  auto to_spill = [&]() -> Status {
+    if (!spill) return Status::Ok();
+    Mesh piece = builder.Take();
+    return spill->Append(piece);
+  };
   if (tiles_x * tiles_y <= 1) {  // one piece
     std::vector<ScanPiece> pieces;
     for (int i = 0; i < scans.count; ++i) {
@@ -179,6 +184,7 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
     progress.Report(0.9, "marching cubes");
     builder.Add(*grid);
+    if (Status s = to_spill(); !s) return s.error();
   } else {  // tile by tile (issue 13, item 5): memory of one tile's pieces, patches and field
     const double reach = CandidateRadius(options) + first->max_patch_edge + options.voxel_m;
     const int count = tiles_x * tiles_y;
@@ -198,13 +204,19 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
         const int cy = std::clamp((by - data.lo.y) / tile, 0, tiles_y - 1);
         return cy * tiles_x + cx <= t;
       });
+      if (Status s = to_spill(); !s) return s.error();
     }
   }
   result.mesh = std::move(builder.mesh());
   result.mesh.origin = first->origin;
-  if (options.remove_small_pieces)
+  if (options.remove_small_pieces && spill) {
+    auto removed = spill->RemoveSmallPieces(options.min_piece_fraction);
+    if (!removed) return removed.error();
+    result.removed_triangles = *removed;
+  } else if (options.remove_small_pieces) {
     result.removed_triangles = RemoveSmallPieces(result.mesh, options.min_piece_fraction);
-  if (result.mesh.triangles.empty()) {
+  }
+  if ((spill ? spill->triangle_count() : result.mesh.triangles.size()) == 0) {
     return MakeError(ErrorCode::kFailed,
                      "merge: the field has no zero crossing; the voxel may be too large for the data or the band too "
                      "thin (try a smaller voxel size)");

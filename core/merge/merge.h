@@ -12,6 +12,7 @@
 #include "core/merge/merge_estimate.h"
 #include "core/merge/merge_options.h"
 #include "core/merge/mesh.h"
+#include "core/merge/mesh_spill.h"
 
 namespace scanreg::merge {
 
@@ -44,8 +45,10 @@ struct ScanSource {
 ScanSource ScansInMemory(const std::vector<const Scan*>& scans);
 
 // All scans must be registered (world_from_scan set). Cancelled: kCancelled, no result.
+// spill: the mesh is appended there tile by tile (small pieces removed there too) and the result's
+// mesh stays empty but for its origin — its memory is then one tile's, whatever the mesh's size.
 Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& options, ProgressSink& progress,
-                                   const CancelToken& cancel);
+                                   const CancelToken& cancel, MeshSpill* spill = nullptr);
 // The same for scans in memory.
 Expected<MergeResult> MergeScanSet(const std::vector<Scan>& scans, const MergeOptions& options, ProgressSink& progress,
                                    const CancelToken& cancel);

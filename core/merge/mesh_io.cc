@@ -30,12 +30,6 @@ void AppendWorld(std::string& out, const Eigen::Vector3d& origin, const Eigen::V
 
 const char* kDoubleVertex = "property double x\nproperty double y\nproperty double z\n";
 
-double LargestWorldCoordinate(const Mesh& mesh) {
-  double largest = 0.0;
-  for (const auto& v : mesh.vertices)
-    largest = std::max(largest, (mesh.origin + v.cast<double>()).cwiseAbs().maxCoeff());
-  return largest;
-}
 
 // An atomic output appended a few megabytes at a time: a mesh of tens of millions of triangles is
 // never held a second time as its file's bytes.
@@ -70,65 +64,99 @@ double FloatRoundingError(double magnitude) {
   return 0.5 * (std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
 }
 
-Status WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh) {
+Status InMemoryMesh::ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const {
+  for (const auto& v : mesh_.vertices)
+    if (Status s = f(v); !s) return s;
+  return Status::Ok();
+}
+
+Status InMemoryMesh::ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const {
+  for (const auto& t : mesh_.triangles)
+    if (Status s = f(t); !s) return s;
+  return Status::Ok();
+}
+
+Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh) {
   ChunkedOutput output(path);
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
-  out += "element vertex " + std::to_string(mesh.vertices.size()) + "\n" + kDoubleVertex;
-  out += "element face " + std::to_string(mesh.triangles.size()) +
+  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex;
+  out += "element face " + std::to_string(mesh.triangle_count()) +
          "\nproperty list uchar int vertex_indices\nend_header\n";
-  for (const auto& v : mesh.vertices) {
-    AppendWorld(out, mesh.origin, v);
-    if (Status s = output.Drain(); !s) return s;
-  }
-  for (const auto& t : mesh.triangles) {
-    Append(out, std::uint8_t(3));
-    Append(out, std::int32_t(t[0])), Append(out, std::int32_t(t[1])), Append(out, std::int32_t(t[2]));
-    if (Status s = output.Drain(); !s) return s;
-  }
+  const Eigen::Vector3d origin = mesh.origin();
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+        AppendWorld(out, origin, v);
+        return output.Drain();
+      });
+      !s)
+    return s;
+  if (Status s = mesh.ForEachTriangle([&](const Eigen::Vector3i& t) {
+        Append(out, std::uint8_t(3));
+        Append(out, std::int32_t(t[0])), Append(out, std::int32_t(t[1])), Append(out, std::int32_t(t[2]));
+        return output.Drain();
+      });
+      !s)
+    return s;
   return output.Commit();
 }
 
-Status WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh) {
+Status WriteMeshObj(const std::filesystem::path& path, const MeshSource& mesh) {
   ChunkedOutput output(path);
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
-  out = "# scanreg merged mesh: " + std::to_string(mesh.vertices.size()) + " vertices, " +
-                    std::to_string(mesh.triangles.size()) + " triangles, absolute coordinates (metres)\n";
+  out = "# scanreg merged mesh: " + std::to_string(mesh.vertex_count()) + " vertices, " +
+        std::to_string(mesh.triangle_count()) + " triangles, absolute coordinates (metres)\n";
   char buf[128];
-  for (const auto& v : mesh.vertices) {
-    const Eigen::Vector3d p = mesh.origin + v.cast<double>();
-    out.append(buf, std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f\n", p.x(), p.y(), p.z()));
-    if (Status s = output.Drain(); !s) return s;
-  }
-  for (const auto& t : mesh.triangles) {
-    out.append(buf, std::snprintf(buf, sizeof buf, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1));
-    if (Status s = output.Drain(); !s) return s;
-  }
+  const Eigen::Vector3d origin = mesh.origin();
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+        const Eigen::Vector3d p = origin + v.cast<double>();
+        out.append(buf, std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f\n", p.x(), p.y(), p.z()));
+        return output.Drain();
+      });
+      !s)
+    return s;
+  if (Status s = mesh.ForEachTriangle([&](const Eigen::Vector3i& t) {
+        out.append(buf, std::snprintf(buf, sizeof buf, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1));
+        return output.Drain();
+      });
+      !s)
+    return s;
   return output.Commit();
 }
 
-Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
+Status WriteMeshStl(const std::filesystem::path& path, const MeshSource& mesh) {
+  std::vector<Eigen::Vector3f> vertices;  // each triangle's corners are written
+  vertices.reserve(mesh.vertex_count());
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+        vertices.push_back(v);
+        return Status::Ok();
+      });
+      !s)
+    return s;
+  const Eigen::Vector3d origin = mesh.origin();
   ChunkedOutput output(path);
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out.assign(80, ' ');
   const std::string title = "scanreg merged mesh, world coordinates (metres)";
   std::memcpy(out.data(), title.data(), title.size());
-  Append(out, std::uint32_t(mesh.triangles.size()));
-  for (const auto& t : mesh.triangles) {
-    Eigen::Vector3f corners[4];
-    for (int k = 0; k < 3; ++k) corners[k + 1] = (mesh.origin + mesh.vertices[t[k]].cast<double>()).cast<float>();
-    // The normal from the local (origin-relative) vertices: exact even where world floats are coarse.
-    const Eigen::Vector3f &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
-    corners[0] = (b - a).cross(c - a);
-    if (corners[0].norm() > 0) corners[0].normalize();
-    for (const Eigen::Vector3f& p : corners) Append(out, p.x()), Append(out, p.y()), Append(out, p.z());
-    Append(out, std::uint16_t(0));
-    if (Status s = output.Drain(); !s) return s;
-  }
-  const double largest = LargestWorldCoordinate(mesh);
+  Append(out, std::uint32_t(mesh.triangle_count()));
+  if (Status s = mesh.ForEachTriangle([&](const Eigen::Vector3i& t) {
+        Eigen::Vector3f corners[4];
+        for (int k = 0; k < 3; ++k) corners[k + 1] = (origin + vertices[t[k]].cast<double>()).cast<float>();
+        // The normal from the local (origin-relative) vertices: exact even where world floats are coarse.
+        const Eigen::Vector3f &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+        corners[0] = (b - a).cross(c - a);
+        if (corners[0].norm() > 0) corners[0].normalize();
+        for (const Eigen::Vector3f& p : corners) Append(out, p.x()), Append(out, p.y()), Append(out, p.z());
+        Append(out, std::uint16_t(0));
+        return output.Drain();
+      });
+      !s)
+    return s;
+  double largest = 0.0;
+  for (const auto& v : vertices) largest = std::max(largest, (origin + v.cast<double>()).cwiseAbs().maxCoeff());
   if (FloatRoundingError(largest) > kFloatWarningM) {
     char buf[320];
     std::snprintf(buf, sizeof buf,
@@ -140,7 +168,7 @@ Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh) {
   return output.Commit();
 }
 
-Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
+Status WriteMeshFile(const std::filesystem::path& path, const MeshSource& mesh) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext == ".ply") return WriteMeshPly(path, mesh);
@@ -150,17 +178,23 @@ Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
                    "cannot write mesh '" + path.string() + "': use a .ply, .obj or .stl file name");
 }
 
-Status WritePointCloudPly(const std::filesystem::path& path, const Eigen::Vector3d& origin,
-                          const std::vector<Eigen::Vector3f>& points) {
+Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh) {
+  return WriteMeshFile(path, InMemoryMesh(mesh));
+}
+
+Status WritePointCloudPly(const std::filesystem::path& path, const MeshSource& mesh) {
   ChunkedOutput output(path);
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
-  out += "element vertex " + std::to_string(points.size()) + "\n" + kDoubleVertex + "end_header\n";
-  for (const auto& v : points) {
-    AppendWorld(out, origin, v);
-    if (Status s = output.Drain(); !s) return s;
-  }
+  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex + "end_header\n";
+  const Eigen::Vector3d origin = mesh.origin();
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+        AppendWorld(out, origin, v);
+        return output.Drain();
+      });
+      !s)
+    return s;
   return output.Commit();
 }
 

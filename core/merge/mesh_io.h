@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -18,13 +19,40 @@ constexpr double kFloatWarningM = 1e-4;  // 0.1 mm
 // Largest rounding error of a coordinate of this magnitude stored as a 32-bit float (metres).
 double FloatRoundingError(double magnitude);
 
-Status WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh);  // binary little-endian
-Status WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh);
-Status WriteMeshStl(const std::filesystem::path& path, const Mesh& mesh);  // binary
+// What the writers read: a mesh in memory (InMemoryMesh) or streamed from disk (MeshSpill).
+class MeshSource {
+ public:
+  virtual ~MeshSource() = default;
+  virtual Eigen::Vector3d origin() const = 0;
+  virtual std::size_t vertex_count() const = 0;
+  virtual std::size_t triangle_count() const = 0;
+  // f on every vertex (relative to the origin) / triangle, in order; stops at f's first error.
+  virtual Status ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const = 0;
+  virtual Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const = 0;
+};
+
+class InMemoryMesh : public MeshSource {
+ public:
+  explicit InMemoryMesh(const Mesh& mesh) : mesh_(mesh) {}
+  Eigen::Vector3d origin() const override { return mesh_.origin; }
+  std::size_t vertex_count() const override { return mesh_.vertices.size(); }
+  std::size_t triangle_count() const override { return mesh_.triangles.size(); }
+  Status ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const override;
+  Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const override;
+
+ private:
+  const Mesh& mesh_;
+};
+
+// Streamed: PLY and OBJ hold a few megabytes of the file at a time; STL holds the vertices (it
+// writes each triangle's corners).
+Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh);  // binary little-endian
+Status WriteMeshObj(const std::filesystem::path& path, const MeshSource& mesh);
+Status WriteMeshStl(const std::filesystem::path& path, const MeshSource& mesh);  // binary
 // By extension: .ply, .obj or .stl (case-insensitive); other extensions are an error.
+Status WriteMeshFile(const std::filesystem::path& path, const MeshSource& mesh);
 Status WriteMeshFile(const std::filesystem::path& path, const Mesh& mesh);
-// Points (world = origin + point) as a binary PLY vertex list of doubles.
-Status WritePointCloudPly(const std::filesystem::path& path, const Eigen::Vector3d& origin,
-                          const std::vector<Eigen::Vector3f>& points);
+// The mesh's vertices (world = origin + vertex) as a binary PLY vertex list of doubles.
+Status WritePointCloudPly(const std::filesystem::path& path, const MeshSource& mesh);
 
 }  // namespace scanreg::merge

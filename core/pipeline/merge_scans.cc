@@ -90,7 +90,7 @@ Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool
 
 Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::vector<int>& which,
                                         const MergeOptions& options, std::size_t scan_budget_bytes,
-                                        ProgressSink& progress, const CancelToken& cancel) {
+                                        ProgressSink& progress, const CancelToken& cancel, merge::MeshSpill* spill) {
   if (Status s = options.Validate(); !s) return s.error();
   if (Status s = CheckSelection(which.size(), project.scans.size()); !s) return s.error();
   for (int i : which) {
@@ -140,7 +140,7 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
       scan_budget_bytes);
   merge::ScanSource source{int(which.size()), [&](int k) { return merged.Get(k); }};
   SubProgress merge_progress(progress, 0.25, 1.0);
-  Expected<MergeResult> result = merge::MergeScanSet(source, options, merge_progress, cancel);
+  Expected<MergeResult> result = merge::MergeScanSet(source, options, merge_progress, cancel, spill);
   if (result.ok()) {
     result->moving_per_scan = moving_per_scan;
     result->estimate = estimate;
@@ -150,6 +150,10 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
 }
 
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh) { return merge::WriteMeshFile(path, mesh); }
+
+Status WriteMesh(const std::filesystem::path& path, const merge::MeshSource& mesh) {
+  return merge::WriteMeshFile(path, mesh);
+}
 
 Status ValidateMeshPath(const std::filesystem::path& path) {
   const std::string ext = io::LowerExtension(path);
@@ -170,14 +174,25 @@ Status ValidatePointsPath(const std::filesystem::path& path) {
 }
 
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh) {
+  return WritePoints(path, merge::InMemoryMesh(mesh));
+}
+
+Status WritePoints(const std::filesystem::path& path, const merge::MeshSource& mesh) {
   if (Status s = ValidatePointsPath(path); !s) return s;
   const std::string ext = io::LowerExtension(path);
-  if (ext == ".las") {
+  if (ext == ".las") {  // the LAS writer takes its points in memory (24 bytes each)
     io::LasCloud cloud;
-    for (const auto& v : mesh.vertices) cloud.points.push_back(mesh.origin + v.cast<double>());
+    cloud.points.reserve(mesh.vertex_count());
+    const Eigen::Vector3d origin = mesh.origin();
+    if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+          cloud.points.push_back(origin + v.cast<double>());
+          return Status::Ok();
+        });
+        !s)
+      return s;
     return io::WriteLas(path, cloud);
   }
-  return merge::WritePointCloudPly(path, mesh.origin, mesh.vertices);
+  return merge::WritePointCloudPly(path, mesh);
 }
 
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,

@@ -37,9 +37,11 @@ Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool
 // previews, the moving-object test scan by scan against its observers, a first pass for the
 // extents, then each tile the cells that reach it. The same mesh as MergeScans on the loaded scans.
 // Errors as MergeScans's, and a scan that cannot be read (naming it and its file).
+// spill: the mesh goes there (merge::MergeScanSet), not into the result.
 Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::vector<int>& which,
                                         const MergeOptions& options, std::size_t scan_budget_bytes,
-                                        ProgressSink& progress, const CancelToken& cancel);
+                                        ProgressSink& progress, const CancelToken& cancel,
+                                        merge::MeshSpill* spill = nullptr);
 
 // Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
 // data's scale — a thousandth of the scans' median extent, at least their point spacing, between
@@ -50,12 +52,14 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
                                MergeEstimate* estimate, const std::vector<int>& strides = {});
 
-// Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic.
+// Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic. From a spill too.
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);
+Status WriteMesh(const std::filesystem::path& path, const merge::MeshSource& mesh);
 // Writes the merged point cloud (the mesh's vertices: points on the merged surface) in world
 // coordinates: a binary PLY of doubles (.ply) or LAS 1.4 at 0.1 mm (.las); atomic. Other extensions
 // are an error.
 Status WritePoints(const std::filesystem::path& path, const Mesh& mesh);
+Status WritePoints(const std::filesystem::path& path, const merge::MeshSource& mesh);
 // The checks WriteMesh and WritePoints make first (the extension), for callers to run before a
 // long merge.
 Status ValidateMeshPath(const std::filesystem::path& path);

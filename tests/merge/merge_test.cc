@@ -5,11 +5,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
 
 #include "core/merge/distance_field.h"
+#include "core/merge/mesh_io.h"
+#include "core/merge/mesh_spill.h"
 #include "core/simulate/scanner.h"
 #include "core/simulate/scene.h"
 #include "tests/merge/merge_test_util.h"
+#include "tests/support/test_paths.h"
 
 namespace scanreg::merge {
 namespace {
@@ -35,6 +39,57 @@ std::vector<Scan> SphereScans(const Eigen::Vector3d& c, double r, double sigma) 
 }
 
 class SphereMerge : public ::testing::TestWithParam<MergeMethod> {};
+
+std::string FileBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Issue 13 item 5: a merge that spills its mesh to disk tile by tile writes the same file as one
+// that holds it (small pieces removed on disk as in memory), and leaves no temporary file behind.
+TEST(MeshSpill, ASpilledMeshIsWrittenAsTheMeshInMemory) {  // TSDF: the method does not matter here
+  const Eigen::Vector3d c(10.3, -4.2, 1.7), small_c = c + Eigen::Vector3d(4.0, 0.0, 0.0);
+  auto scans = SphereScans(c, 0.5, 0.01);
+  // A small cap far from the sphere: a piece that the clean-up removes.
+  scans.push_back(MakeWindowScan(SphereCaster(small_c, 0.1), small_c + Eigen::Vector3d(0, 2.0, 0), small_c, 30, 30,
+                                 0.12, 0.002, 99, "small"));
+  MergeOptions options;
+  options.voxel_m = 0.025;
+  options.sigma_m = 0.01;
+  options.method = MergeMethod::kTsdf;
+  options.tile_blocks = 2;
+  options.min_piece_fraction = 0.2;
+  NullProgress progress;
+  CancelToken cancel;
+  test::TempDir dir;
+  auto held = MergeScanSet(scans, options, progress, cancel);
+  ASSERT_TRUE(held) << held.error().ToString();
+  EXPECT_GT(held->removed_triangles, 0u) << "the small cap was a piece of its own";
+  ASSERT_TRUE(WriteMeshFile(dir / "held.ply", held->mesh));
+  {
+    auto spill = MeshSpill::Create(dir.path());
+    ASSERT_TRUE(spill) << spill.error().ToString();
+    std::vector<const Scan*> ptrs;
+    for (const Scan& s : scans) ptrs.push_back(&s);
+    auto spilled = MergeScanSet(ScansInMemory(ptrs), options, progress, cancel, spill->get());
+    ASSERT_TRUE(spilled) << spilled.error().ToString();
+    EXPECT_TRUE(spilled->mesh.triangles.empty()) << "the mesh went to the spill";
+    EXPECT_EQ(spilled->removed_triangles, held->removed_triangles);
+    EXPECT_EQ((*spill)->triangle_count(), held->mesh.triangles.size());
+    EXPECT_EQ((*spill)->vertex_count(), held->mesh.vertices.size());
+    ASSERT_TRUE(WriteMeshFile(dir / "spilled.ply", **spill));
+    ASSERT_TRUE(WriteMeshFile(dir / "spilled.obj", **spill));
+    ASSERT_TRUE(WriteMeshFile(dir / "held.obj", held->mesh));
+  }
+  EXPECT_GT(FileBytes(dir / "held.ply").size(), 100000u);
+  EXPECT_EQ(FileBytes(dir / "held.ply"), FileBytes(dir / "spilled.ply"));
+  EXPECT_EQ(FileBytes(dir / "held.obj"), FileBytes(dir / "spilled.obj"));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().rfind(".scanreg-mesh", 0), std::string::npos) << entry.path();
+  auto nowhere = MeshSpill::Create(dir / "no" / "such" / "folder");
+  ASSERT_FALSE(nowhere);
+  EXPECT_NE(nowhere.error().message.find("no/such/folder"), std::string::npos) << nowhere.error().message;
+}
 
 TEST_P(SphereMerge, WatertightAndBelowInputNoise) {
   const Eigen::Vector3d c(10.3, -4.2, 1.7);

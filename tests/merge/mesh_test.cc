@@ -178,7 +178,7 @@ TEST(MeshIo, ExportsReReadWithIdenticalCounts) {
   EXPECT_EQ(near_counts.second, mesh.triangles.size());
   EXPECT_GE(near_counts.first, distinct.size() * 98 / 100);  // a few near-duplicate corners meet at float steps
   EXPECT_EQ(stl_warnings, 1);
-  ASSERT_TRUE(WritePointCloudPly(dir / "p.ply", mesh.origin, mesh.vertices));
+  ASSERT_TRUE(WritePointCloudPly(dir / "p.ply", InMemoryMesh(mesh)));
   EXPECT_EQ(ReadPlyCounts(dir / "p.ply", &first), std::make_pair(mesh.vertices.size(), std::size_t(0)));
   EXPECT_NEAR((first - world0).norm(), 0.0, 1e-9);
   const Status bad = WriteMeshFile(dir / "m.xyz", mesh);

@@ -1,0 +1,160 @@
+#include "core/merge/mesh_spill.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <limits>
+#include <string>
+
+namespace scanreg::merge {
+
+namespace {
+
+constexpr std::uint32_t kDropped = std::numeric_limits<std::uint32_t>::max();
+constexpr std::size_t kChunkItems = 1 << 18;  // read back 256 k vertices or triangles at a time
+
+std::filesystem::path TempName(const std::filesystem::path& dir, const char* what) {
+  static std::atomic<int> serial{0};
+  return dir / (".scanreg-mesh-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) + "." + what);
+}
+
+// Reads `file` from its start in chunks of T, calling f(chunk, count) for each.
+template <typename T, typename F>
+Status ReadBack(std::FILE* file, const std::filesystem::path& path, std::size_t total, F&& f) {
+  if (std::fflush(file) != 0 || std::fseek(file, 0, SEEK_SET) != 0)
+    return MakeError(ErrorCode::kIoError, "cannot read back the merge's temporary file " + path.string());
+  std::vector<T> chunk(std::min(total, kChunkItems));
+  for (std::size_t done = 0; done < total;) {
+    const std::size_t n = std::min(chunk.size(), total - done);
+    if (std::fread(chunk.data(), sizeof(T), n, file) != n)
+      return MakeError(ErrorCode::kIoError, "the merge's temporary file " + path.string() + " is shorter than written");
+    if (Status s = f(chunk.data(), n); !s) return s;
+    done += n;
+  }
+  if (std::fseek(file, 0, SEEK_END) != 0)
+    return MakeError(ErrorCode::kIoError, "cannot seek the merge's temporary file " + path.string());
+  return Status::Ok();
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<MeshSpill>> MeshSpill::Create(const std::filesystem::path& dir) {
+  std::unique_ptr<MeshSpill> spill(new MeshSpill());
+  spill->vertex_path_ = TempName(dir.empty() ? "." : dir, "vertices");
+  spill->triangle_path_ = TempName(dir.empty() ? "." : dir, "triangles");
+  spill->vertex_file_ = std::fopen(spill->vertex_path_.c_str(), "w+b");
+  if (spill->vertex_file_) spill->triangle_file_ = std::fopen(spill->triangle_path_.c_str(), "w+b");
+  if (!spill->vertex_file_ || !spill->triangle_file_) {
+    return MakeError(ErrorCode::kIoError, "cannot create the merge's temporary files in " + dir.string() + ": " +
+                                              std::strerror(errno) + " (the mesh is written there: check the folder)");
+  }
+  return spill;
+}
+
+MeshSpill::~MeshSpill() {
+  for (auto [file, path] : {std::make_pair(vertex_file_, vertex_path_), std::make_pair(triangle_file_, triangle_path_)}) {
+    if (!file) continue;
+    std::fclose(file);
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);
+  }
+}
+
+Status MeshSpill::Flush(std::FILE* file, const std::filesystem::path& path, const void* data, std::size_t bytes) {
+  if (bytes == 0 || std::fwrite(data, 1, bytes, file) == bytes) return Status::Ok();
+  return MakeError(ErrorCode::kIoError, "cannot write the merge's temporary file " + path.string() + ": " +
+                                            std::strerror(errno) + " (is the disk full?)");
+}
+
+std::uint32_t MeshSpill::Find(std::uint32_t v) {
+  while (parent_[v] != v) v = parent_[v] = parent_[parent_[v]];
+  return v;
+}
+
+Status MeshSpill::Append(Mesh& piece) {
+  if (renumbered_) return MakeError(ErrorCode::kFailed, "merge: a piece appended after the small pieces were removed");
+  origin_ = piece.origin;
+  const std::size_t first = vertices_;
+  if (first + piece.vertices.size() >= kDropped)
+    return MakeError(ErrorCode::kInvalidArgument, "merge: the mesh has more than 4 billion vertices; use a larger voxel");
+  if (Status s = Flush(vertex_file_, vertex_path_, piece.vertices.data(), piece.vertices.size() * sizeof(Eigen::Vector3f));
+      !s)
+    return s;
+  if (Status s = Flush(triangle_file_, triangle_path_, piece.triangles.data(),
+                       piece.triangles.size() * sizeof(Eigen::Vector3i));
+      !s)
+    return s;
+  vertices_ += piece.vertices.size();
+  triangles_ += piece.triangles.size();
+  parent_.resize(vertices_);
+  for (std::size_t v = first; v < vertices_; ++v) parent_[v] = std::uint32_t(v);
+  for (const Eigen::Vector3i& t : piece.triangles) {
+    const std::uint32_t a = Find(std::uint32_t(t[0]));
+    parent_[Find(std::uint32_t(t[1]))] = a;
+    parent_[Find(std::uint32_t(t[2]))] = a;
+  }
+  kept_vertices_ = vertices_, kept_triangles_ = triangles_;
+  piece.vertices = {};
+  piece.triangles = {};
+  return Status::Ok();
+}
+
+Expected<std::size_t> MeshSpill::RemoveSmallPieces(double min_fraction) {
+  if (renumbered_) return std::size_t(0);
+  for (std::size_t v = 0; v < vertices_; ++v) parent_[v] = Find(std::uint32_t(v));  // each vertex: its root
+  std::vector<std::uint32_t> count(vertices_, 0);  // triangles per piece, by its root
+  if (Status s = ReadBack<Eigen::Vector3i>(triangle_file_, triangle_path_, triangles_,
+                                           [&](const Eigen::Vector3i* t, std::size_t n) {
+                                             for (std::size_t i = 0; i < n; ++i) ++count[parent_[t[i][0]]];
+                                             return Status::Ok();
+                                           });
+      !s)
+    return s.error();
+  const std::uint32_t largest = count.empty() ? 0 : *std::max_element(count.begin(), count.end());
+  const double keep_from = min_fraction * double(largest);
+  // New ids in vertex order (every vertex belongs to a triangle): a vertex's own entry is read
+  // before it is overwritten, and the counts are by root.
+  std::uint32_t next = 0;
+  std::size_t kept_triangles = 0;
+  for (std::size_t v = 0; v < vertices_; ++v) {
+    const std::uint32_t root = parent_[v];
+    const bool keep = double(count[root]) >= keep_from;
+    if (keep && root == v) kept_triangles += count[root];
+    parent_[v] = keep ? next++ : kDropped;
+  }
+  renumbered_ = true;
+  kept_vertices_ = next;
+  kept_triangles_ = kept_triangles;
+  return triangles_ - kept_triangles;
+}
+
+Status MeshSpill::ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const {
+  std::size_t v = 0;
+  return ReadBack<Eigen::Vector3f>(vertex_file_, vertex_path_, vertices_, [&](const Eigen::Vector3f* p, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i, ++v) {
+      if (renumbered_ && parent_[v] == kDropped) continue;
+      if (Status s = f(p[i]); !s) return s;
+    }
+    return Status::Ok();
+  });
+}
+
+Status MeshSpill::ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const {
+  return ReadBack<Eigen::Vector3i>(triangle_file_, triangle_path_, triangles_,
+                                   [&](const Eigen::Vector3i* t, std::size_t n) {
+                                     for (std::size_t i = 0; i < n; ++i) {
+                                       Eigen::Vector3i out = t[i];
+                                       if (renumbered_) {
+                                         if (parent_[out[0]] == kDropped) continue;
+                                         for (int k = 0; k < 3; ++k) out[k] = int(parent_[out[k]]);
+                                       }
+                                       if (Status s = f(out); !s) return s;
+                                     }
+                                     return Status::Ok();
+                                   });
+}
+
+}  // namespace scanreg::merge
