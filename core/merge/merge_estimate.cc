@@ -67,7 +67,7 @@ Count CountBlocks(const std::vector<const Scan*>& scans, const std::vector<int>&
 }
 
 MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<int>& strides,
-                       const MergeOptions& options, double voxel, std::size_t cap) {
+                       const MergeOptions& options, double voxel, std::size_t cap, bool mesh_on_disk) {
   MergeEstimate e;
   Count c = CountBlocks(scans, strides, options, voxel, cap, voxel);
   e.points = c.points;
@@ -90,9 +90,11 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<
   const double field_blocks = c.tile_share * blocks;  // at once: one tile's
   const double patch_points = std::min(double(e.points), kPatchPointsPerBlock * field_blocks);
   const bool masks = options.remove_moving;
+  const double mesh = blocks * kMeshBytesPerBlock;
   const double bytes = field_blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
-                       blocks * kMeshBytesPerBlock + (masks ? double(c.cells) * kBytesPerCellMask : 0.0);
+                       (mesh_on_disk ? 0.0 : mesh) + (masks ? double(c.cells) * kBytesPerCellMask : 0.0);
   e.bytes = static_cast<std::size_t>(std::min(bytes, 1e18));
+  if (mesh_on_disk) e.disk_bytes = static_cast<std::size_t>(std::min(mesh, 1e18));
   const double threads = std::max(1u, std::thread::hardware_concurrency());
   const double per_block = options.method == MergeMethod::kTsdf ? kSecondsPerBlockTsdf : kSecondsPerBlockMl;
   e.seconds = blocks * per_block / threads;
@@ -120,12 +122,13 @@ std::string MergeEstimate::Describe() const {
   char buf[160];
   std::snprintf(buf, sizeof buf, "about %s and %s (%s%zu blocks of 8^3 voxels)", Bytes(double(bytes)).c_str(),
                 Duration(seconds).c_str(), extrapolated ? "~" : "", blocks);
-  return buf;
+  if (disk_bytes == 0) return buf;
+  return buf + (", the mesh's " + Bytes(double(disk_bytes)) + " on disk while it is written");
 }
 
 MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,
-                            std::size_t cap_blocks, const std::vector<int>& strides) {
-  return Estimate(scans, strides, options, options.voxel_m, cap_blocks);
+                            std::size_t cap_blocks, const std::vector<int>& strides, bool mesh_on_disk) {
+  return Estimate(scans, strides, options, options.voxel_m, cap_blocks, mesh_on_disk);
 }
 
 std::size_t DefaultMemoryBudget() {
@@ -135,20 +138,20 @@ std::size_t DefaultMemoryBudget() {
 }
 
 Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions& options, MergeEstimate* estimate,
-                      const std::vector<int>& strides) {
+                      const std::vector<int>& strides, bool mesh_on_disk) {
   const std::size_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes : DefaultMemoryBudget();
   // The cap keeps the count's own key set small (~50 bytes a key) and quick: past it the count is
   // extrapolated from a coarser voxel (which errs on the large side: the band does not shrink with
   // the surface's square).
   const std::size_t cap = std::clamp<std::size_t>(budget / sizeof(SparseGrid::Block) + 1, 1000, 500'000);
-  *estimate = Estimate(scans, strides, options, options.voxel_m, cap);
+  *estimate = Estimate(scans, strides, options, options.voxel_m, cap, mesh_on_disk);
   if (estimate->bytes <= budget) return Status::Ok();
   // The smallest voxel that fits: blocks shrink with the voxel's square on surfaces; a few steps.
   double voxel = options.voxel_m;
   MergeEstimate fit = *estimate;
   for (int i = 0; i < 8 && fit.bytes > budget; ++i) {
     voxel *= std::max(1.05, std::sqrt(double(fit.bytes) / (0.9 * double(budget))));
-    fit = Estimate(scans, strides, options, voxel, cap);
+    fit = Estimate(scans, strides, options, voxel, cap, mesh_on_disk);
   }
   char voxels[80];
   std::snprintf(voxels, sizeof voxels, "merge: at a voxel of %.4g m the merge needs ", options.voxel_m);

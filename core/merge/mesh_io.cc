@@ -57,6 +57,15 @@ class ChunkedOutput {
   std::string bytes_;
 };
 
+// The vertices in world coordinates, as PLY doubles.
+Status WriteWorldVertices(const MeshSource& mesh, ChunkedOutput& output) {
+  const Eigen::Vector3d origin = mesh.origin();
+  return mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+    AppendWorld(output.bytes(), origin, v);
+    return output.Drain();
+  });
+}
+
 }  // namespace
 
 double FloatRoundingError(double magnitude) {
@@ -84,13 +93,7 @@ Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh) {
   out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex;
   out += "element face " + std::to_string(mesh.triangle_count()) +
          "\nproperty list uchar int vertex_indices\nend_header\n";
-  const Eigen::Vector3d origin = mesh.origin();
-  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
-        AppendWorld(out, origin, v);
-        return output.Drain();
-      });
-      !s)
-    return s;
+  if (Status s = WriteWorldVertices(mesh, output); !s) return s;
   if (Status s = mesh.ForEachTriangle([&](const Eigen::Vector3i& t) {
         Append(out, std::uint8_t(3));
         Append(out, std::int32_t(t[0])), Append(out, std::int32_t(t[1])), Append(out, std::int32_t(t[2]));
@@ -188,13 +191,7 @@ Status WritePointCloudPly(const std::filesystem::path& path, const MeshSource& m
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
   out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex + "end_header\n";
-  const Eigen::Vector3d origin = mesh.origin();
-  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
-        AppendWorld(out, origin, v);
-        return output.Drain();
-      });
-      !s)
-    return s;
+  if (Status s = WriteWorldVertices(mesh, output); !s) return s;
   return output.Commit();
 }
 

@@ -106,7 +106,8 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
     std::vector<const Scan*> scans;
     std::vector<int> strides;
     for (const ScanPreview& p : *previews) scans.push_back(&p.scan), strides.push_back(p.stride);
-    if (Status fits = merge::CheckMergeFits(scans, options, &estimate, strides); !fits) return fits.error();
+    if (Status fits = merge::CheckMergeFits(scans, options, &estimate, strides, spill != nullptr); !fits)
+      return fits.error();
   }
   LogInfo("merge of " + std::to_string(which.size()) + " scans: " + estimate.Describe());
   std::vector<Eigen::Isometry3d> poses;

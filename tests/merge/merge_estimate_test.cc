@@ -84,5 +84,24 @@ TEST(MergeEstimate, AMergeBeyondTheBudgetIsRefusedWithAVoxelThatFits) {
   EXPECT_LE(estimate.bytes, options.memory_budget_bytes);
 }
 
+// A merge that spills its mesh to disk (the CLI's) needs the mesh's bytes on disk, not in memory:
+// the same estimate otherwise, and a budget that refuses the mesh in memory lets it through.
+TEST(MergeEstimate, AMeshSpilledToDiskIsCountedOnDisk) {
+  const std::vector<Scan> scans = SphereViews();
+  MergeOptions options;
+  options.voxel_m = 0.004;
+  const MergeEstimate held = EstimateMerge(Pointers(scans), options);
+  const MergeEstimate spilled = EstimateMerge(Pointers(scans), options, 50'000'000, {}, true);
+  EXPECT_EQ(held.disk_bytes, 0u);
+  EXPECT_GT(spilled.disk_bytes, held.bytes / 4) << "the mesh is a large share of a merge's memory";
+  EXPECT_NEAR(double(spilled.bytes + spilled.disk_bytes), double(held.bytes), 2.0);
+  EXPECT_EQ(spilled.blocks, held.blocks);
+  EXPECT_NE(spilled.Describe().find("on disk"), std::string::npos) << spilled.Describe();
+  options.memory_budget_bytes = (spilled.bytes + held.bytes) / 2;
+  MergeEstimate estimate;
+  EXPECT_FALSE(CheckMergeFits(Pointers(scans), options, &estimate).ok());
+  EXPECT_TRUE(CheckMergeFits(Pointers(scans), options, &estimate, {}, true).ok()) << estimate.Describe();
+}
+
 }  // namespace
 }  // namespace scanreg::merge
