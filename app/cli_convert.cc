@@ -26,7 +26,7 @@ int RunConvert(const std::vector<std::string>& argv) {
                           "convert: input and output are the same file; input files are never modified"));
   }
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   if (args->Has("scan") && io::LowerExtension(in) != ".e57") {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "convert: --scan chooses scans of an .e57 input only"));
   }

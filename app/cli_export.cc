@@ -34,7 +34,7 @@ int RunExportClouds(const std::vector<std::string>& argv) {
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto exported = pipeline::ExportClouds(*project, options, progress, cancel);
   if (!exported) return Fail(MakeError(exported.error().code, "export-clouds: " + exported.error().message));
   int written = 0;

@@ -84,7 +84,7 @@ int RunMerge(const std::vector<std::string>& argv) {
     if (Status s = io::CheckNotAnInput(*path, io::ProjectInputs(*project), what); !s) return Fail(s.error());
   }
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   std::vector<int> registered_scans;  // only these are read
   for (std::size_t i = 0; i < project->scans.size(); ++i)
     if (project->scans[i].registered) registered_scans.push_back(int(i));

@@ -31,7 +31,7 @@ int PlanPairJobs(io::Project& project, pipeline::RegisterOptions options, const 
   Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register --plan");
   if (!lock) return Fail(lock.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   pipeline::ScanStore store =
       pipeline::ProjectScanStore(project, memory_budget > 0 ? memory_budget : pipeline::DefaultMemoryBudget());
   pipeline::PairJobPlan plan;
@@ -111,7 +111,7 @@ int RunPairJob(const std::vector<std::string>& argv) {
   options->feature_cache_dir = pipeline::ProjectCacheDir(*project);
   const auto [a, b] = plan->pairs[k];
   NullProgress quiet;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto scans = pipeline::LoadProjectScans(*project, quiet, cancel, {a, b});
   if (!scans) return Fail(scans.error());
   auto result = pipeline::RunPairJob((*scans)[0], (*scans)[1], pipeline::WithPlanLengths(*options, *plan), cancel);

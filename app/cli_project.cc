@@ -50,7 +50,7 @@ int RunNew(const std::vector<std::string>& argv) {
     return Fail(s.error());
   }
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto project = pipeline::CreateProject(args->positional()[0], options, progress, cancel);
   if (!project) return Fail(project.error());
   std::printf("created %s with %zu scans\n", project->project.file.string().c_str(), project->project.scans.size());
@@ -67,7 +67,7 @@ int RunInfo(const std::vector<std::string>& argv) {
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto scans = pipeline::LoadProjectScans(*project, progress, cancel);
   if (!scans) return Fail(scans.error());
   std::printf("project %s\n%zu scans, %zu links, root %s\n\n", project->file.string().c_str(), scans->size(),

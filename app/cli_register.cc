@@ -165,7 +165,7 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
   Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(project.file, "scanreg-cli register");
   if (!lock) return Fail(lock.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   pipeline::ScanStore store =
       pipeline::ProjectScanStore(project, memory_budget > 0 ? memory_budget : pipeline::DefaultMemoryBudget());
   auto result = pipeline::RegisterProjectScans(project, store, options, progress, cancel, exchange);

@@ -20,7 +20,7 @@ int RunReport(const std::vector<std::string>& argv) {
   auto project = io::LoadProject(args->positional()[0]);
   if (!project) return Fail(project.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto index = report::WriteReport(*project, *out, progress, cancel);
   if (!index) return Fail(index.error());
   int registered = 0;

@@ -132,7 +132,7 @@ int RunSimulate(const std::vector<std::string>& argv) {
   auto format = ReadScanFormat(*args);
   if (!format) return Fail(format.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   auto project = pipeline::WriteSimulatedProject(*options, *out, progress, cancel, *format);
   if (!project) return Fail(project.error());
   PrintProjectSummary(*project);
@@ -155,7 +155,7 @@ int RunDemo(const std::vector<std::string>& argv) {
   auto format = ReadScanFormat(*args);
   if (!format) return Fail(format.error());
   TerminalProgress progress;
-  CancelToken cancel;
+  CancelToken& cancel = InterruptToken();
   std::printf("simulating a %d-station street project (%dx%d, noise %.1f mm) in %s\n", options->stations,
               options->scanner.cols, options->scanner.rows, options->scanner.range_noise_m * 1000, out.c_str());
   auto project = pipeline::WriteSimulatedProject(*options, out, progress, cancel, *format);

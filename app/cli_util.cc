@@ -2,11 +2,33 @@
 
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 
 #include "core/io/text_parse.h"
 
 namespace scanreg::cli {
+
+namespace {
+
+CancelToken interrupt_token;
+
+extern "C" void OnInterrupt(int signal) {
+  interrupt_token.Cancel();            // a lock-free atomic store: safe in a handler
+  std::signal(signal, SIG_DFL);        // a second one ends the process
+}
+
+}  // namespace
+
+CancelToken& InterruptToken() {
+  static const bool installed = [] {
+    std::signal(SIGINT, OnInterrupt);
+    std::signal(SIGTERM, OnInterrupt);
+    return true;
+  }();
+  (void)installed;
+  return interrupt_token;
+}
 
 int Fail(const Error& error) {
   std::fprintf(stderr, "scanreg-cli: %s\n", EscapeControlBytes(error.message).c_str());

@@ -20,6 +20,11 @@ int Fail(const Error& error);
 std::optional<Args> ParseOrHelp(const std::string& command, const std::string& usage,
                                 const std::vector<std::string>& argv, std::vector<OptionSpec> specs, int* exit_code);
 
+// The command's cancel token: Ctrl-C (SIGINT) or SIGTERM cancels it, so a long job stops at its next
+// check, removes its temporary files and exits with 130 having written nothing; a second signal
+// ends the process at once.
+CancelToken& InterruptToken();
+
 // Progress on stderr: one line per stage and every 10 %, only when stderr is a terminal or
 // SCANREG_PROGRESS=1.
 class TerminalProgress final : public ProgressSink {

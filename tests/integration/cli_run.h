@@ -18,9 +18,10 @@ struct RunResult {
   std::string output;  // stdout and stderr
 };
 
-inline RunResult RunCli(const std::string& args) {
+// A shell command line, its stderr with its stdout.
+inline RunResult RunCommand(const std::string& command_line) {
   RunResult r;
-  const std::string cmd = std::string(SCANREG_CLI) + " " + args + " 2>&1";
+  const std::string cmd = command_line + " 2>&1";
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return r;
   std::array<char, 4096> buf{};
@@ -29,6 +30,8 @@ inline RunResult RunCli(const std::string& args) {
   r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   return r;
 }
+
+inline RunResult RunCli(const std::string& args) { return RunCommand(std::string(SCANREG_CLI) + " " + args); }
 
 inline std::string Quote(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 

@@ -320,6 +320,19 @@ TEST(CliTest, MergeWritesAMeshOfTheRegisteredScansOnly) {
     if (line.rfind("element vertex ", 0) == 0) vertices = std::stol(line.substr(15));
   EXPECT_NE(merged.output.find(std::to_string(vertices) + " vertices"), std::string::npos) << merged.output;
   EXPECT_NE(merged.output.find("merged point cloud: " + std::to_string(vertices) + " points"), std::string::npos);
+  // The mesh went through temporary files beside the output (merge::MeshSpill), none left behind.
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().rfind(".scanreg-mesh", 0), std::string::npos) << entry.path();
+  // Ctrl-C during a long merge (maximum likelihood at 1 cm): it stops, exits with 130, and leaves
+  // neither the output nor its temporary files (KILL after a minute if it did not stop).
+  const RunResult interrupted =
+      test::RunCommand("timeout --preserve-status -s INT -k 60 2 " + std::string(SCANREG_CLI) + " merge " +
+                       Quote(project_file) + " --method ml --voxel 0.01 --out " + Quote(dir / "long.ply"));
+  EXPECT_EQ(interrupted.status, 130) << interrupted.output;
+  EXPECT_NE(interrupted.output.find("cancelled"), std::string::npos) << interrupted.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "long.ply"));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(entry.path().filename().string().rfind(".scanreg-mesh", 0), std::string::npos) << entry.path();
   // Nonsense options are refused.
   EXPECT_EQ(RunCli("merge " + Quote(project_file) + " --voxel 0 --out " + Quote(dir / "x.ply")).status, 2);
   // Options that cannot mean anything are refused at once (the fuzz run: 277 s for --sigma 1e9, a
