@@ -36,6 +36,19 @@ cv::Mat WrapPad(const cv::Mat& image, int margin) {
 
 }  // namespace
 
+int SiftStrips(int rows, int cols, const SiftOptions& options) {
+  const std::int64_t pixels = std::int64_t(std::max(rows, 0)) * std::max(cols, 0);
+  if (options.strip_pixels <= 0 || pixels <= options.strip_pixels) return 1;
+  const int strips = int((pixels + options.strip_pixels - 1) / options.strip_pixels);
+  return std::clamp(strips, 1, std::max(1, cols / (2 * kStripOverlapPx)));  // strips wider than their overlaps
+}
+
+std::size_t SiftStripPixels(int rows, int cols, const SiftOptions& options) {
+  const int strips = SiftStrips(rows, cols, options);
+  if (strips == 1) return std::size_t(std::max(rows, 0)) * std::size_t(std::max(cols, 0));
+  return std::size_t(rows) * std::size_t(cols / strips + 1 + 2 * kStripOverlapPx + kStripAlignPx);
+}
+
 Status SiftOptions::Validate() const {
   auto bad = [](const std::string& what) {
     return MakeError(ErrorCode::kInvalidArgument, "SIFT options: " + what);
@@ -51,6 +64,7 @@ Status SiftOptions::Validate() const {
     return bad("mask_erosion_px must be in [0, 50], got " + std::to_string(mask_erosion_px));
   if (wrap_margin_px < 0 || wrap_margin_px > 1000)
     return bad("wrap_margin_px must be in [0, 1000], got " + std::to_string(wrap_margin_px));
+  if (strip_pixels < 0) return bad("strip_pixels must be >= 0 (0 = whole), got " + std::to_string(strip_pixels));
   return Status::Ok();
 }
 
@@ -82,11 +96,32 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
 
   cv::Ptr<cv::SIFT> sift = cv::SIFT::create(0, options.octave_layers, options.contrast_threshold,
                                             options.edge_threshold, options.sigma);
+  // Column strips of a large panorama, each with kStripOverlapPx of its neighbours' columns (or
+  // the wrap padding), keeping the keypoints centred in its own columns: SIFT's pyramids are one
+  // strip's, not the whole panorama's (issue 13: ~1.6 GB on a 10 M-pixel panorama).
+  const int strips = SiftStrips(scan.rows, scan.cols, options);
   std::vector<cv::KeyPoint> cv_keypoints;
   cv::Mat cv_descriptors;
-  sift->detectAndCompute(image, mask, cv_keypoints, cv_descriptors);
-  if (!cv_keypoints.empty() && (cv_descriptors.type() != CV_32F || cv_descriptors.cols != kSiftDescriptorSize))
-    return MakeError(ErrorCode::kFailed, "SIFT on scan '" + scan.name + "' returned descriptors of an unexpected type");
+  for (int k = 0; k < strips; ++k) {
+    const int c0 = int(std::int64_t(scan.cols) * k / strips), c1 = int(std::int64_t(scan.cols) * (k + 1) / strips);
+    // A strip starts on a multiple of kStripAlignPx of the (padded) panorama, so that its octaves
+    // sample the same pixels as the whole panorama's.
+    const int a = strips > 1 ? std::max(0, (c0 + margin - kStripOverlapPx) / kStripAlignPx * kStripAlignPx) : 0;
+    const int b = std::min(image.cols, c1 + margin + (strips > 1 ? kStripOverlapPx : margin));
+    std::vector<cv::KeyPoint> found;
+    cv::Mat descriptors;
+    sift->detectAndCompute(image.colRange(a, b), mask.colRange(a, b), found, descriptors);
+    if (!found.empty() && (descriptors.type() != CV_32F || descriptors.cols != kSiftDescriptorSize))
+      return MakeError(ErrorCode::kFailed, "SIFT on scan '" + scan.name + "' returned descriptors of an unexpected type");
+    for (int i = 0; i < static_cast<int>(found.size()); ++i) {
+      cv::KeyPoint kp = found[i];
+      kp.pt.x += float(a);  // padded image coordinates
+      const int c = static_cast<int>(std::lround(kp.pt.x - margin));
+      if (c < c0 || c >= c1) continue;  // another strip's (or the padding's)
+      cv_keypoints.push_back(kp);
+      cv_descriptors.push_back(descriptors.row(i));
+    }
+  }
 
   // Keep each keypoint once: only those whose centre lies in the original columns.
   std::vector<int> keep;

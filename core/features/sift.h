@@ -1,6 +1,7 @@
 // SIFT keypoints and descriptors on a scan's reflectance panorama (W §2 step 1, SPEC §2.1).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/common/expected.h"
@@ -9,6 +10,9 @@
 namespace scanreg {
 
 inline constexpr int kSiftDescriptorSize = 128;
+// Columns of overlap each side of a strip of a panorama detected in strips (SiftOptions::strip_pixels).
+inline constexpr int kStripOverlapPx = 128;
+inline constexpr int kStripAlignPx = 64;
 
 // A keypoint in panorama pixel coordinates. Pixel (row r, column c) has its centre at
 // (u, v) = (c, r) (OpenCV convention). The nearest cell (round(v), round(u)) is always inside the
@@ -30,6 +34,10 @@ struct SiftOptions {
   int octave_layers = 3;            // DoG layers per octave
   int mask_erosion_px = 2;          // pixels: valid-cell mask eroded by this; drops keypoints at the sky cut
   int wrap_margin_px = 48;          // pixels: panorama padded by this from the other side (360° seam); 0 = off
+  // A panorama of more pixels is detected in column strips of about this many, each with
+  // kStripOverlapPx columns of its neighbours: SIFT's memory (~160 bytes a pixel) is one strip's
+  // (issue 13: ~1.6 GB on a 10 M-pixel panorama). 0: always whole. The paper's 3000 x 750 is whole.
+  std::int64_t strip_pixels = 2'500'000;
 
   Status Validate() const;
 };
@@ -48,8 +56,13 @@ struct ScanFeatures {
 // mask_erosion_px of an empty cell are dropped. When wrap_margin_px > 0 and the scan covers 360°
 // in azimuth (assumed for panoramic scans with an angular grid spanning > 350°), the image is
 // padded left and right with columns from the other side, so blobs across the seam are found;
-// each keypoint is kept once (the copy whose centre lies in the original columns). Keypoints are sorted by decreasing response
+// each keypoint is kept once (the copy whose centre lies in the original columns). A panorama
+// larger than options.strip_pixels is detected strip by strip (SiftStrips). Keypoints are sorted by decreasing response
 // (ties: by v, then u), so the result is deterministic. Thread-safe (no shared state).
 Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& options = {});
+// The strips DetectFeatures cuts a rows x cols panorama into (1: whole), and the most pixels one
+// strip's detection works on.
+int SiftStrips(int rows, int cols, const SiftOptions& options);
+std::size_t SiftStripPixels(int rows, int cols, const SiftOptions& options);
 
 }  // namespace scanreg

@@ -201,8 +201,10 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
   // SIFT's working memory (OpenCV's Gaussian and difference-of-Gaussian pyramids) counts against the
   // budget too: measured ~160 bytes a panorama pixel (10 scans of 5000x2000 on 2 threads peaked
   // 3.2 GB higher than with SIFT from the cache), so scans are prepared side by side only while
-  // that fits (one always runs).
+  // that fits (one always runs). A large panorama is detected strip by strip (SiftStrips): one
+  // strip's pixels count.
   constexpr std::size_t kSiftBytesPerPixel = 160;
+  auto sift_pixels = [&](const Scan& s) { return SiftStripPixels(s.rows, s.cols, options.sift); };
   MemoryGate sift_memory(store.budget_bytes());
   std::vector<PreparedScan> prepared(n);
   std::vector<Status> prepared_ok(n, Status::Ok());
@@ -218,7 +220,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     }
     bool cached = false;
     {
-      const MemoryGate::Hold hold(sift_memory, UsesSift(options.features) ? kSiftBytesPerPixel * (*scan)->size() : 0);
+      const MemoryGate::Hold hold(sift_memory, UsesSift(options.features) ? kSiftBytesPerPixel * sift_pixels(**scan) : 0);
       prepared_ok[i] = PrepareScanFeatures(**scan, options, &prepared[i], &cached, cancel);
     }
     prepared[i].scan = nullptr;  // from here on, the store's

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include "feature_fixtures.h"
@@ -26,6 +27,9 @@ TEST(SiftTest, ValidateRejectsNonsense) {
   EXPECT_FALSE(o.Validate().ok());
   o = SiftOptions();
   o.wrap_margin_px = -3;
+  EXPECT_FALSE(o.Validate().ok());
+  o = SiftOptions();
+  o.strip_pixels = -1;
   EXPECT_FALSE(o.Validate().ok());
   Scan scan("s", 20, 20);
   EXPECT_EQ(DetectFeatures(scan, o).error().code, ErrorCode::kInvalidArgument);
@@ -112,6 +116,53 @@ TEST(SiftTest, MaxFeaturesKeepsTheStrongest) {
     EXPECT_EQ(best->keypoints[i].u, all->keypoints[i].u);
     EXPECT_EQ(best->keypoints[i].response, all->keypoints[i].response);
   }
+}
+
+// Issue 13: a panorama detected in column strips (SIFT's memory one strip's) finds the keypoints of
+// the whole panorama — the same ones, with the same descriptors, except near a strip's border at
+// coarse scales — and none twice across a border. Here W's 3000 x 750 in 4 strips.
+TEST(SiftTest, StripsFindTheWholePanoramasKeypointsOnce) {
+  const Scan& scan = test::FullSizePair().at(0);
+  SiftOptions whole_options;
+  whole_options.strip_pixels = 0;
+  SiftOptions strip_options;
+  strip_options.strip_pixels = scan.size() / 4;
+  ASSERT_EQ(SiftStrips(scan.rows, scan.cols, whole_options), 1);
+  ASSERT_EQ(SiftStrips(scan.rows, scan.cols, strip_options), 4);
+  EXPECT_LT(SiftStripPixels(scan.rows, scan.cols, strip_options), scan.size() / 2);
+  const auto whole = DetectFeatures(scan, whole_options);
+  const auto strips = DetectFeatures(scan, strip_options);
+  ASSERT_TRUE(whole.ok() && strips.ok());
+  ASSERT_GT(whole->size(), 1000);
+  // The same keypoint: within 0.01 px and with the same descriptor.
+  auto same = [](const ScanFeatures& a, int i, const ScanFeatures& b, int j) {
+    const Keypoint &ka = a.keypoints[i], &kb = b.keypoints[j];
+    if (std::abs(ka.u - kb.u) > 0.01f || std::abs(ka.v - kb.v) > 0.01f || std::abs(ka.size - kb.size) > 0.01f)
+      return false;
+    float d = 0;
+    for (int k = 0; k < kSiftDescriptorSize; ++k) d += std::abs(a.Descriptor(i)[k] - b.Descriptor(j)[k]);
+    return d < 1e-3f * kSiftDescriptorSize;
+  };
+  auto found_in = [&](const ScanFeatures& a, const ScanFeatures& b) {
+    int found = 0;
+    for (int i = 0; i < a.size(); ++i)
+      for (int j = 0; j < b.size(); ++j)
+        if (same(a, i, b, j)) {
+          ++found;
+          break;
+        }
+    return found;
+  };
+  const int kept = found_in(*whole, *strips), extra = strips->size() - found_in(*strips, *whole);
+  std::printf("whole %d keypoints, strips %d: %d of the whole's found, %d not in the whole\n", whole->size(),
+              strips->size(), kept, extra);
+  EXPECT_GE(kept, 0.99 * whole->size());
+  EXPECT_LE(extra, 0.01 * whole->size());
+  int twice = 0;  // the same keypoint from two strips
+  for (int i = 0; i < strips->size(); ++i)
+    for (int j = i + 1; j < strips->size(); ++j) twice += same(*strips, i, *strips, j);
+  EXPECT_EQ(twice, 0);
+  for (int i = 1; i < strips->size(); ++i) ASSERT_GE(strips->keypoints[i - 1].response, strips->keypoints[i].response);
 }
 
 }  // namespace
