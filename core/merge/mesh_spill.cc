@@ -78,8 +78,8 @@ Status MeshSpill::Append(Mesh& piece) {
   if (renumbered_) return MakeError(ErrorCode::kFailed, "merge: a piece appended after the small pieces were removed");
   origin_ = piece.origin;
   const std::size_t first = vertices_;
-  if (first + piece.vertices.size() >= kDropped)
-    return MakeError(ErrorCode::kInvalidArgument, "merge: the mesh has more than 4 billion vertices; use a larger voxel");
+  if (first + piece.vertices.size() >= 0x7FFFFFFFu)  // ids are int, and the pieces' marks need the top bit
+    return MakeError(ErrorCode::kInvalidArgument, "merge: the mesh has more than 2 billion vertices; use a larger voxel");
   if (Status s = Flush(vertex_file_, vertex_path_, piece.vertices.data(), piece.vertices.size() * sizeof(Eigen::Vector3f));
       !s)
     return s;
@@ -104,25 +104,44 @@ Status MeshSpill::Append(Mesh& piece) {
 
 Expected<std::size_t> MeshSpill::RemoveSmallPieces(double min_fraction) {
   if (renumbered_) return std::size_t(0);
-  for (std::size_t v = 0; v < vertices_; ++v) parent_[v] = Find(std::uint32_t(v));  // each vertex: its root
-  std::vector<std::uint32_t> count(vertices_, 0);  // triangles per piece, by its root
+  // In the union-find array alone (4 bytes a vertex, no second array). Vertex ids are below
+  // kKeepMark (Append): a root's entry is kRoot | its triangle count, then kRoot | keep; every other
+  // vertex's entry its root, then kKeepMark or kDropped, then its new id.
+  constexpr std::uint32_t kRoot = 0x80000000u, kCount = 0x7FFFFFFFu, kKeepMark = 0x7FFFFFFFu;
+  for (std::size_t v = 0; v < vertices_; ++v) parent_[v] = Find(std::uint32_t(v));
+  for (std::size_t v = 0; v < vertices_; ++v)
+    if (parent_[v] == v) parent_[v] = kRoot;
+  auto root_of = [&](std::uint32_t v) { return (parent_[v] & kRoot) ? v : parent_[v]; };
   if (Status s = ReadBack<Eigen::Vector3i>(triangle_file_, triangle_path_, triangles_,
                                            [&](const Eigen::Vector3i* t, std::size_t n) {
-                                             for (std::size_t i = 0; i < n; ++i) ++count[parent_[t[i][0]]];
+                                             for (std::size_t i = 0; i < n; ++i) {
+                                               std::uint32_t& entry = parent_[root_of(std::uint32_t(t[i][0]))];
+                                               if ((entry & kCount) < kCount) ++entry;  // saturates
+                                             }
                                              return Status::Ok();
                                            });
       !s)
     return s.error();
-  const std::uint32_t largest = count.empty() ? 0 : *std::max_element(count.begin(), count.end());
+  std::uint32_t largest = 0;
+  for (std::size_t v = 0; v < vertices_; ++v)
+    if (parent_[v] & kRoot) largest = std::max(largest, parent_[v] & kCount);
   const double keep_from = min_fraction * double(largest);
-  // New ids in vertex order (every vertex belongs to a triangle): a vertex's own entry is read
-  // before it is overwritten, and the counts are by root.
-  std::uint32_t next = 0;
   std::size_t kept_triangles = 0;
   for (std::size_t v = 0; v < vertices_; ++v) {
-    const std::uint32_t root = parent_[v];
-    const bool keep = double(count[root]) >= keep_from;
-    if (keep && root == v) kept_triangles += count[root];
+    if (!(parent_[v] & kRoot)) continue;
+    const std::uint32_t count = parent_[v] & kCount;
+    const bool keep = double(count) >= keep_from;
+    if (keep) kept_triangles += count;
+    parent_[v] = kRoot | (keep ? 1u : 0u);
+  }
+  for (std::size_t v = 0; v < vertices_; ++v) {  // roots untouched here: every read is of a root
+    if (parent_[v] & kRoot) continue;
+    parent_[v] = (parent_[parent_[v]] & 1u) ? kKeepMark : kDropped;
+  }
+  // New ids in vertex order (every vertex belongs to a triangle).
+  std::uint32_t next = 0;
+  for (std::size_t v = 0; v < vertices_; ++v) {
+    const bool keep = parent_[v] == kKeepMark || parent_[v] == (kRoot | 1u);
     parent_[v] = keep ? next++ : kDropped;
   }
   renumbered_ = true;
