@@ -19,6 +19,9 @@ namespace {
 constexpr double kPatchPointsPerBlock = 160.0;
 constexpr double kBytesPerPatchPoint = 80.0;
 constexpr double kMeshBytesPerBlock = 2400.0;
+// A spilled mesh's temporary files (12 bytes a vertex and a triangle): 886 and ~1000 bytes a block
+// on the 11-station street and the 100-station city at 2 cm.
+constexpr double kSpillBytesPerBlock = 1000.0;
 constexpr double kSecondsPerBlockMl = 3e-3;
 constexpr double kSecondsPerBlockTsdf = 1.4e-4;  // range-image projection gated per block
 constexpr double kBytesPerCellMask = 1.0;  // the moving-object masks (the left-out points are marked in place)
@@ -94,7 +97,7 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<
   const double bytes = field_blocks * (sizeof(SparseGrid::Block) + 48.0) + patch_points * kBytesPerPatchPoint +
                        (mesh_on_disk ? 0.0 : mesh) + (masks ? double(c.cells) * kBytesPerCellMask : 0.0);
   e.bytes = static_cast<std::size_t>(std::min(bytes, 1e18));
-  if (mesh_on_disk) e.disk_bytes = static_cast<std::size_t>(std::min(mesh, 1e18));
+  if (mesh_on_disk) e.disk_bytes = static_cast<std::size_t>(std::min(blocks * kSpillBytesPerBlock, 1e18));
   const double threads = std::max(1u, std::thread::hardware_concurrency());
   const double per_block = options.method == MergeMethod::kTsdf ? kSecondsPerBlockTsdf : kSecondsPerBlockMl;
   e.seconds = blocks * per_block / threads;

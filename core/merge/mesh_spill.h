@@ -32,6 +32,9 @@ class MeshSpill : public MeshSource {
   // RemoveSmallPieces does in memory). Returns the number of triangles removed.
   Expected<std::size_t> RemoveSmallPieces(double min_fraction);
 
+  // The folder of its files.
+  std::filesystem::path directory() const { return vertex_path_.parent_path(); }
+
   Eigen::Vector3d origin() const override { return origin_; }
   std::size_t vertex_count() const override { return kept_vertices_; }
   std::size_t triangle_count() const override { return kept_triangles_; }

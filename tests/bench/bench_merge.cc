@@ -235,14 +235,19 @@ void Bunny(Table& table, bool quick) {
   }
 }
 
-// One simulated street project merged with each method (returns within 25 m of their scanner, as
-// the README demo merges).
-void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
-               const std::vector<merge::MergeMethod>& methods) {
+SimulatedProjectOptions StreetProject(int stations, int cols, int rows) {
   SimulatedProjectOptions po;
   po.stations = stations;
   po.scanner.cols = cols;
   po.scanner.rows = rows;
+  return po;
+}
+
+// One simulated street project merged with each method (returns within 25 m of their scanner, as
+// the README demo merges).
+void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
+               const std::vector<merge::MergeMethod>& methods) {
+  const SimulatedProjectOptions po = StreetProject(stations, cols, rows);
   NullProgress progress;
   CancelToken cancel;
   auto scans = SimulateProject(po, progress, cancel);
@@ -292,10 +297,7 @@ void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
 // that has been opened.
 void StreetFromFiles(Table& table, int stations, int cols, int rows, double voxel) {
   namespace fs = std::filesystem;
-  SimulatedProjectOptions po;
-  po.stations = stations;
-  po.scanner.cols = cols;
-  po.scanner.rows = rows;
+  const SimulatedProjectOptions po = StreetProject(stations, cols, rows);
   NullProgress progress;
   CancelToken cancel;
   const fs::path dir = fs::temp_directory_path() / ("scanreg-bench-merge-" + std::to_string(::getpid()));
