@@ -24,7 +24,7 @@ Expected<std::vector<std::vector<std::uint32_t>>> MovingPointCells(const merge::
     const Eigen::Vector3d at = poses[i].translation();
     auto distance = [&](int j) { return (poses[j].translation() - at).norm(); };
     std::stable_sort(others.begin(), others.end(), [&](int a, int b) { return distance(a) < distance(b); });
-    int observed = 0;  // the nearest observers with a panoramic grid, as MovingPointMasks
+    int observed = 0;  // the nearest observers with a panoramic grid
     for (std::size_t k = 0; k < others.size() && observed < options.observers; ++k) {
       auto observer = scans.get(others[k]);
       if (!observer) return observer.error();
