@@ -101,7 +101,8 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   // strip's, not the whole panorama's (issue 13: ~1.6 GB on a 10 M-pixel panorama).
   const int strips = SiftStrips(scan.rows, scan.cols, options);
   std::vector<cv::KeyPoint> cv_keypoints;
-  cv::Mat cv_descriptors;
+  std::vector<cv::Mat> strip_descriptors(strips);
+  std::vector<std::pair<int, int>> descriptor_of;  // per keypoint: its strip and row there
   for (int k = 0; k < strips; ++k) {
     const int c0 = int(std::int64_t(scan.cols) * k / strips), c1 = int(std::int64_t(scan.cols) * (k + 1) / strips);
     // A strip starts on a multiple of kStripAlignPx of the (padded) panorama, so that its octaves
@@ -109,7 +110,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
     const int a = strips > 1 ? std::max(0, (c0 + margin - kStripOverlapPx) / kStripAlignPx * kStripAlignPx) : 0;
     const int b = std::min(image.cols, c1 + margin + (strips > 1 ? kStripOverlapPx : margin));
     std::vector<cv::KeyPoint> found;
-    cv::Mat descriptors;
+    cv::Mat& descriptors = strip_descriptors[k];
     sift->detectAndCompute(image.colRange(a, b), mask.colRange(a, b), found, descriptors);
     if (!found.empty() && (descriptors.type() != CV_32F || descriptors.cols != kSiftDescriptorSize))
       return MakeError(ErrorCode::kFailed, "SIFT on scan '" + scan.name + "' returned descriptors of an unexpected type");
@@ -119,7 +120,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
       const int c = static_cast<int>(std::lround(kp.pt.x - margin));
       if (c < c0 || c >= c1) continue;  // another strip's (or the padding's)
       cv_keypoints.push_back(kp);
-      cv_descriptors.push_back(descriptors.row(i));
+      descriptor_of.emplace_back(k, i);
     }
   }
 
@@ -151,7 +152,8 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const cv::KeyPoint& kp = cv_keypoints[keep[k]];
     out.keypoints.push_back(Keypoint{kp.pt.x - margin, kp.pt.y, kp.size, kp.angle, kp.response});
-    std::copy_n(cv_descriptors.ptr<float>(keep[k]), kSiftDescriptorSize,
+    const auto [strip, row] = descriptor_of[keep[k]];
+    std::copy_n(strip_descriptors[strip].ptr<float>(row), kSiftDescriptorSize,
                 out.descriptors.data() + k * kSiftDescriptorSize);
   }
   return out;

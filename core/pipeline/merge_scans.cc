@@ -17,19 +17,27 @@ namespace scanreg::pipeline {
 
 namespace {
 
-// Leaves out of `scan` the cells on moving objects (ascending) and the points beyond the maximum
-// range: marked invalid. Returns how many were on moving objects.
-std::size_t LeaveOut(Scan& scan, const std::vector<std::uint32_t>& moving, double max_range_m) {
-  std::size_t left = 0;
-  for (std::uint32_t c : moving) {
-    if (c < scan.size() && scan.valid[c]) scan.valid[c] = 0, ++left;
-  }
+// Leaves out of `scan` the cells on moving objects and the points beyond the maximum range: marked
+// invalid.
+void LeaveOut(Scan& scan, const std::vector<std::uint32_t>& moving, double max_range_m) {
+  for (std::uint32_t c : moving)
+    if (c < scan.size()) scan.valid[c] = 0;
   if (max_range_m > 0.0) {
     const double max2 = max_range_m * max_range_m;
     for (std::size_t c = 0; c < scan.size(); ++c)
       if (scan.valid[c] && scan.points[c].squaredNorm() > max2) scan.valid[c] = 0;
   }
-  return left;
+}
+
+// The merge's account of what it left out (MovingPointCells marks valid points only) and expected.
+void Account(const std::vector<std::vector<std::uint32_t>>& moving, const MergeEstimate& estimate,
+             Expected<MergeResult>& result) {
+  if (!result.ok()) return;
+  result->estimate = estimate;
+  for (const auto& cells : moving) {
+    result->moving_per_scan.push_back(cells.size());
+    result->moving_points += cells.size();
+  }
 }
 
 // The cells on moving objects of each scan (none when options do not remove them, or one scan).
@@ -75,16 +83,9 @@ Expected<MergeResult> MergeScans(std::vector<Scan> scans, const std::vector<bool
   for (const Scan* s : selected) poses.push_back(s->world_from_scan);
   auto moving = MovingCells(merge::ScansInMemory(selected), poses, options, progress, cancel);
   if (!moving) return moving.error();
-  std::vector<std::size_t> moving_per_scan(selected.size(), 0);
-  for (std::size_t k = 0; k < chosen.size(); ++k)
-    moving_per_scan[k] = LeaveOut(*chosen[k], (*moving)[k], options.max_range_m);
-  moving = std::vector<std::vector<std::uint32_t>>();
+  for (std::size_t k = 0; k < chosen.size(); ++k) LeaveOut(*chosen[k], (*moving)[k], options.max_range_m);
   Expected<MergeResult> result = merge::MergeScanSet(selected, options, progress, cancel);
-  if (result.ok()) {
-    result->moving_per_scan = moving_per_scan;
-    result->estimate = estimate;
-    for (std::size_t n : moving_per_scan) result->moving_points += n;
-  }
+  Account(*moving, estimate, result);
   return result;
 }
 
@@ -93,9 +94,14 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
                                         ProgressSink& progress, const CancelToken& cancel, merge::MeshSpill* spill) {
   if (Status s = options.Validate(); !s) return s.error();
   if (Status s = CheckSelection(which.size(), project.scans.size()); !s) return s.error();
-  for (int i : which) {
+  std::vector<int> position(project.scans.size(), -1);  // of each project scan in `which`
+  for (std::size_t k = 0; k < which.size(); ++k) {
+    const int i = which[k];
     if (i < 0 || std::size_t(i) >= project.scans.size())
       return MakeError(ErrorCode::kInvalidArgument, "merge: scan number " + std::to_string(i) + " is not in the project");
+    if (position[i] >= 0)
+      return MakeError(ErrorCode::kInvalidArgument, "merge: scan " + project.scans[i].name + " is asked for twice");
+    position[i] = int(k);
   }
   // The estimate from the previews (the preview cache: no full read when it holds them).
   MergeEstimate estimate;
@@ -139,30 +145,18 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
     if (!moving) return moving.error();
   }
   // The scans as merged: their left-out points marked when read.
-  std::vector<Scan> heads(which.size());
-  for (std::size_t k = 0; k < which.size(); ++k) {
-    heads[k].name = project.scans[which[k]].name;
-    heads[k].world_from_scan = project.scans[which[k]].world_from_scan;
-    heads[k].reference_world_from_scan = project.scans[which[k]].reference_world_from_scan;
-  }
-  std::vector<std::size_t> moving_per_scan(which.size(), 0);
   ScanStore merged(
-      std::move(heads),
-      [&](int k) -> Expected<Scan> {
-        Expected<Scan> scan = read_file(which[k]);
-        if (!scan) return scan.error();
-        moving_per_scan[k] = LeaveOut(*scan, (*moving)[k], options.max_range_m);
+      ProjectScanHeads(project),
+      [&](int i) -> Expected<Scan> {
+        Expected<Scan> scan = read_file(i);
+        if (scan) LeaveOut(*scan, (*moving)[position[i]], options.max_range_m);
         return scan;
       },
       scan_budget_bytes);
-  merge::ScanSource source{int(which.size()), [&](int k) { return merged.Get(k); }};
+  merge::ScanSource source{int(which.size()), [&](int k) { return merged.Get(which[k]); }};
   SubProgress merge_progress(progress, 0.25, 1.0);
   Expected<MergeResult> result = merge::MergeScanSet(source, options, merge_progress, cancel, spill);
-  if (result.ok()) {
-    result->moving_per_scan = moving_per_scan;
-    result->estimate = estimate;
-    for (std::size_t n : moving_per_scan) result->moving_points += n;
-  }
+  Account(*moving, estimate, result);
   return result;
 }
 

@@ -163,7 +163,7 @@ std::size_t ScanStore::peak_bytes() const {
   return peak_;
 }
 
-ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes) {
+std::vector<Scan> ProjectScanHeads(const io::Project& project) {
   std::vector<Scan> heads;
   for (const io::ProjectScan& ps : project.scans) {
     Scan head;
@@ -172,7 +172,11 @@ ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes)
     head.reference_world_from_scan = ps.reference_world_from_scan;
     heads.push_back(std::move(head));
   }
-  return ScanStore(std::move(heads), ProjectScanReader(project), budget_bytes);
+  return heads;
+}
+
+ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes) {
+  return ScanStore(ProjectScanHeads(project), ProjectScanReader(project), budget_bytes);
 }
 
 ScanStore::Reader ProjectScanReader(const io::Project& project) {

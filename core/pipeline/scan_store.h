@@ -87,7 +87,9 @@ Scan ScanHead(const Scan& scan);
 // The project's scans through a store: each read with LoadProjectScans (from the binary scan cache
 // when it holds the file) when asked for. The heads carry the project's names and poses.
 ScanStore ProjectScanStore(const io::Project& project, std::size_t budget_bytes);
-// Its reader: the project's scan `index` by LoadProjectScans.
+// Its heads (the project's names and poses) and its reader (the project's scan `index` by
+// LoadProjectScans).
+std::vector<Scan> ProjectScanHeads(const io::Project& project);
 ScanStore::Reader ProjectScanReader(const io::Project& project);
 
 }  // namespace scanreg::pipeline
