@@ -1,6 +1,7 @@
 // scanreg: the desktop application.
 //   --demo              open the simulated demo project (and register it with --register)
 //   --screenshot FILE   render the main window to a PNG once the jobs are done, then exit
+//   --register, --merge register / merge the opened project first
 //   --screenshots DIR   open, register and merge the demo project, save a PNG of each main view
 // (the last two are how the GUI is checked under Xvfb).
 #include <QApplication>
@@ -16,6 +17,7 @@
 
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
+#include "ui/merge_panel.h"
 #include "ui/screenshot_tour.h"
 
 int main(int argc, char** argv) {
@@ -31,12 +33,14 @@ int main(int argc, char** argv) {
   parser.addVersionOption();
   QCommandLineOption demo("demo", "Open the simulated demo project.");
   QCommandLineOption reg("register", "Register the opened project.");
+  QCommandLineOption merge("merge", "Merge the registered scans (the merge panel's options) once the project is open "
+                                    "(and registered, with --register).");
   QCommandLineOption screenshot("screenshot", "Render the main window to FILE (PNG) when done, and exit.", "FILE");
   QCommandLineOption screenshots("screenshots",
                                  "Open, register and merge the demo project, save a PNG of each "
                                  "main view into DIR, and exit.",
                                  "DIR");
-  parser.addOptions({demo, reg, screenshot, screenshots});
+  parser.addOptions({demo, reg, merge, screenshot, screenshots});
   parser.addPositionalArgument("project", "A project file (*.scanreg.json) to open.", "[project]");
   parser.process(app);
 
@@ -68,14 +72,18 @@ int main(int argc, char** argv) {
       QApplication::exit(ok ? 0 : 1);
     });
   };
-  const bool want_register = parser.isSet(reg);
+  // Open, then register (--register), then merge (--merge), then the screenshot.
+  bool want_register = parser.isSet(reg), want_merge = parser.isSet(merge);
   QObject::connect(window.jobs(), &scanreg::ui::JobRunner::Succeeded, &window,
-                   [&window, want_register, finish](const QString& title) {
-                     if (want_register && !title.startsWith(QObject::tr("Registering"))) {
-                       window.RegisterProject();
-                     } else {
-                       finish();
+                   [&window, &want_register, &want_merge, finish](const QString&) {
+                     if (want_register) {
+                       want_register = false;
+                       if (window.RegisterProject()) return;
+                     } else if (want_merge) {
+                       want_merge = false;
+                       if (window.mergePanel()->Run()) return;
                      }
+                     finish();
                    });
   QObject::connect(window.jobs(), &scanreg::ui::JobRunner::Failed, &window,
                    [finish](const QString&, const QString& message, bool) {
