@@ -17,6 +17,8 @@
 #include <QVBoxLayout>
 
 #include "core/merge/merge_estimate.h"
+#include "core/merge/mesh_preview.h"
+#include "core/merge/mesh_spill.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/scan_store.h"
 #include "core/pipeline/project_scans.h"
@@ -40,7 +42,9 @@ const QString kExportTitle = QObject::tr("Exporting the mesh");
 }  // namespace
 
 struct MergePanel::MergedMesh {
-  std::shared_ptr<const merge::Mesh> mesh;
+  std::shared_ptr<const merge::MeshSpill> mesh;  // the whole mesh, on disk
+  std::shared_ptr<const merge::Mesh> preview;
+  double preview_cell_m = 0.0;  // merge::MeshPreview::cell_m
   std::size_t scans = 0;
   double seconds = 0.0;
   merge::MergeMethod method = merge::MergeMethod::kTsdf;
@@ -208,7 +212,7 @@ EstimateOutput CountEstimate(const EstimateInput& in) {
     const double sized = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, in.strides).voxel_m;
     out.options.voxel_m = std::clamp(std::round(sized * 1e4) / 1e4, 1e-3, 2.0);
   }
-  out.fits = merge::CheckMergeFits(scans, out.options, &out.estimate, in.strides);
+  out.fits = merge::CheckMergeFits(scans, out.options, &out.estimate, in.strides, /*mesh_on_disk=*/true);
   return out;
 }
 
@@ -324,14 +328,32 @@ bool MergePanel::Run() {
   }
   return window_->jobs()->Start<MergedMesh>(
       kMergeTitle,
-      [project = window_->project(), registered = std::move(registered), options](
+      [project = window_->project(), registered = std::move(registered), options, preview_triangles = preview_triangles_](
           ProgressSink& progress, const CancelToken& cancel) -> Expected<MergedMesh> {
+        // The mesh goes to temporary files in the project's cache folder as the tiles are meshed (as
+        // the CLI's does): the desktop holds a preview of it, within preview_triangles, and Export
+        // streams the whole mesh from there. The files go with the mesh (next merge, new project, exit).
+        std::filesystem::path dir = pipeline::ProjectCacheDir(project);
+        std::error_code failed;
+        std::filesystem::create_directories(dir, failed);
+        auto spill = merge::MeshSpill::Create(dir);
+        if (!spill) return spill.error();
         // Scans read from their files as the merge needs them, a quarter of the RAM at most resident.
-        Expected<merge::MergeResult> r = pipeline::MergeProjectScans(project, registered, options,
-                                                                     pipeline::DefaultMemoryBudget(), progress, cancel);
+        Expected<merge::MergeResult> r = pipeline::MergeProjectScans(
+            project, registered, options, pipeline::DefaultMemoryBudget(), progress, cancel, spill->get());
         if (!r) return r.error();
-        return MergedMesh{std::make_shared<const merge::Mesh>(std::move(r->mesh)), r->scans, r->seconds, options.method,
-                          options.voxel_m, r->moving_points, options.remove_moving};
+        progress.Report(1.0, "Preparing the mesh for the 3D view");
+        auto preview = merge::PreviewMesh(**spill, preview_triangles, options.voxel_m, cancel);
+        if (!preview) return preview.error();
+        return MergedMesh{std::shared_ptr<const merge::MeshSpill>(std::move(*spill)),
+                          std::make_shared<const merge::Mesh>(std::move(preview->mesh)),
+                          preview->cell_m,
+                          r->scans,
+                          r->seconds,
+                          options.method,
+                          options.voxel_m,
+                          r->moving_points,
+                          options.remove_moving};
       },
       [this](MergedMesh& merged) { OnMerged(merged); });
 }
@@ -343,7 +365,7 @@ bool MergePanel::ExportMesh(const QString& path) {
       [mesh = mesh_, path](ProgressSink& progress, const CancelToken&) -> Expected<ExportedMesh> {
         progress.Report(0.0, "Writing " + path.toStdString());
         if (Status s = pipeline::WriteMesh(path.toStdString(), *mesh); !s) return s.error();
-        return ExportedMesh{path, mesh->triangles.size()};
+        return ExportedMesh{path, mesh->triangle_count()};
       },
       [this](ExportedMesh& exported) {
         summary_->setText(tr("Exported %L1 triangles to %2.").arg(exported.triangles).arg(exported.path));
@@ -366,14 +388,19 @@ void MergePanel::ChooseExportFile() {
 
 void MergePanel::OnMerged(const MergedMesh& merged) {
   mesh_ = merged.mesh;
-  scene_->SetMesh(mesh_);
+  preview_ = merged.preview;
+  scene_->SetMesh(preview_);
   QString text = tr("%L1 triangles, %L2 vertices\nfrom %3 scans (%4, %5 mm voxels) in %6 s.")
-                     .arg(mesh_->triangles.size())
-                     .arg(mesh_->vertices.size())
+                     .arg(mesh_->triangle_count())
+                     .arg(mesh_->vertex_count())
                      .arg(merged.scans)
                      .arg(merged.method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
                      .arg(merged.voxel_m * 1000.0, 0, 'f', 1)
                      .arg(merged.seconds, 0, 'f', 1);
+  if (merged.preview_cell_m > 0.0)
+    text += tr("\nShown simplified to %L1 triangles (vertices joined on %2 mm cells); Export writes the whole mesh.")
+                .arg(preview_->triangles.size())
+                .arg(merged.preview_cell_m * 1000.0, 0, 'f', 0);
   if (merged.removed_moving)
     text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).")
                 .arg(merged.moving_points);
@@ -382,6 +409,7 @@ void MergePanel::OnMerged(const MergedMesh& merged) {
 
 void MergePanel::ClearMesh() {
   mesh_.reset();
+  preview_.reset();
   scene_->SetMesh(nullptr);
   UpdateButtons();
 }

@@ -1,15 +1,19 @@
 // The merge dock (SPEC §4): the merge options (MergeOptions' defaults, then the user's last choice
 // from QSettings), Merge on the worker thread (progress and Cancel in the status bar), the mesh
-// previewed in the 3D view with scans / mesh toggles, and Export to PLY, OBJ or STL (also on the
-// worker). The mesh is dropped when the registration changes (it would no longer match).
+// kept on disk (merge::MeshSpill, in the project's cache folder) and previewed in the 3D view within
+// a triangle budget (merge::PreviewMesh: simplified beyond it) with scans / mesh toggles, and Export
+// of the whole mesh to PLY, OBJ or STL (also on the worker). The mesh is dropped when the
+// registration changes (it would no longer match).
 #pragma once
 
 #include <QWidget>
+#include <algorithm>
 #include <any>
 #include <memory>
 
 #include "core/merge/merge_options.h"
 #include "core/merge/mesh.h"
+#include "core/merge/mesh_spill.h"
 
 class QCheckBox;
 class QComboBox;
@@ -42,8 +46,13 @@ class MergePanel : public QWidget {
   bool ExportMesh(const QString& path);
   // Whether the panel can be seen (its dock's tab in front); a stale estimate is counted on showing.
   void SetShown(bool shown);
-  // The last merged mesh, or null.
-  const merge::Mesh* mesh() const { return mesh_.get(); }
+  // The last merged mesh (on disk), or null.
+  const merge::MeshSource* mesh() const { return mesh_.get(); }
+  // What the 3D view shows of it: the mesh itself, or simplified to the preview budget; or null.
+  const merge::Mesh* preview() const { return preview_.get(); }
+  // The 3D view's budget for the merged mesh (triangles; default kPreviewTriangles), for the next merge.
+  void SetPreviewTriangles(std::size_t triangles) { preview_triangles_ = std::max<std::size_t>(1, triangles); }
+  static constexpr std::size_t kPreviewTriangles = 4'000'000;  // ~300 MB with VTK's copy
 
  private:
   struct MergedMesh;  // the merge job's result
@@ -60,7 +69,9 @@ class MergePanel : public QWidget {
 
   MainWindow* window_;
   ScanScene* scene_;
-  std::shared_ptr<const merge::Mesh> mesh_;  // immutable once merged: the export job reads it too
+  std::shared_ptr<const merge::MeshSpill> mesh_;  // immutable once merged: the export job reads it too
+  std::shared_ptr<const merge::Mesh> preview_;
+  std::size_t preview_triangles_ = kPreviewTriangles;
   QComboBox* method_ = nullptr;
   QDoubleSpinBox* voxel_mm_ = nullptr;
   QSpinBox* smooth_ = nullptr;

@@ -126,7 +126,7 @@ std::string MergeEstimate::Describe() const {
   std::snprintf(buf, sizeof buf, "about %s and %s (%s%zu blocks of 8^3 voxels)", Bytes(double(bytes)).c_str(),
                 Duration(seconds).c_str(), extrapolated ? "~" : "", blocks);
   if (disk_bytes == 0) return buf;
-  return buf + (", the mesh's " + Bytes(double(disk_bytes)) + " on disk while it is written");
+  return buf + (", the mesh's " + Bytes(double(disk_bytes)) + " on disk");
 }
 
 MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,

@@ -14,6 +14,7 @@
 #include "core/merge/marching_cubes.h"
 #include "core/merge/mesh.h"
 #include "core/merge/mesh_io.h"
+#include "core/merge/mesh_preview.h"
 #include "core/merge/sparse_grid.h"
 #include "tests/support/test_paths.h"
 
@@ -63,6 +64,59 @@ TEST(MarchingCubes, SphereIsWatertightAndAccurate) {
   // Euler characteristic of a sphere: V - E + F = 2.
   const EdgeCounts e = CountEdges(mesh);
   EXPECT_EQ(long(mesh.vertices.size()) - long(e.manifold) + long(mesh.triangles.size()), 2);
+}
+
+// Area and enclosed volume (signed, about c) of a mesh: a preview with holes or flipped triangles
+// loses both.
+std::pair<double, double> AreaAndVolume(const Mesh& mesh, const Eigen::Vector3f& c) {
+  double area = 0.0, volume = 0.0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = (mesh.vertices[t[0]] - c).cast<double>(), b = (mesh.vertices[t[1]] - c).cast<double>(),
+                          d = (mesh.vertices[t[2]] - c).cast<double>();
+    area += 0.5 * (b - a).cross(d - a).norm();
+    volume += a.dot(b.cross(d)) / 6.0;
+  }
+  return {area, volume};
+}
+
+TEST(MeshPreview, AMeshWithinTheBudgetIsShownWholeALargerOneSimplifiedOnTheSameSurface) {
+  const Eigen::Vector3f c(0.31f, -0.17f, 0.05f);
+  const float r = 0.4f;
+  const Mesh mesh = ExtractMesh(SpheresGrid({{c, r}}, 0.02));
+  ASSERT_GT(mesh.triangles.size(), 5000u);
+  CancelToken cancel;
+  auto whole = PreviewMesh(InMemoryMesh(mesh), mesh.triangles.size(), 0.02, cancel);
+  ASSERT_TRUE(whole) << whole.error().message;
+  EXPECT_EQ(whole->cell_m, 0.0);
+  EXPECT_EQ(whole->mesh.triangles, mesh.triangles);
+  EXPECT_EQ(whole->mesh.vertices, mesh.vertices);
+  EXPECT_EQ(whole->mesh.origin, mesh.origin);
+
+  const double kPi = 3.14159265358979;
+  for (const std::size_t budget : {std::size_t(2000), std::size_t(500)}) {
+    auto preview = PreviewMesh(InMemoryMesh(mesh), budget, 0.02, cancel);
+    ASSERT_TRUE(preview) << preview.error().message;
+    const Mesh& p = preview->mesh;
+    EXPECT_LE(p.triangles.size(), budget);
+    EXPECT_GT(p.triangles.size(), budget / 8) << "cell " << preview->cell_m;
+    EXPECT_GT(preview->cell_m, 0.02);
+    EXPECT_EQ(p.origin, mesh.origin);
+    for (const auto& t : p.triangles)
+      for (int k = 0; k < 3; ++k) ASSERT_TRUE(t[k] >= 0 && t[k] < int(p.vertices.size()));
+    double worst = 0.0;  // a cell's mean lies inside the sphere by about cell^2 / r
+    for (const auto& v : p.vertices) worst = std::max(worst, double(std::abs((v - c).norm() - r)));
+    EXPECT_LT(worst, preview->cell_m) << "cell " << preview->cell_m;
+    // The same closed, outward surface: its area and volume within a few percent of the sphere's.
+    const auto [area, volume] = AreaAndVolume(p, c);
+    EXPECT_NEAR(area / (4 * kPi * r * r), 1.0, 0.12) << budget;
+    EXPECT_NEAR(volume / (4.0 / 3.0 * kPi * r * r * r), 1.0, 0.15) << budget;
+  }
+
+  cancel.Cancel();
+  auto cancelled = PreviewMesh(InMemoryMesh(mesh), 500, 0.02, cancel);
+  ASSERT_FALSE(cancelled);
+  EXPECT_EQ(cancelled.error().code, ErrorCode::kCancelled);
+  EXPECT_FALSE(PreviewMesh(InMemoryMesh(mesh), 0, 0.02, CancelToken()));
 }
 
 TEST(MeshTest, RemoveSmallPiecesKeepsTheLargeOne) {

@@ -214,12 +214,13 @@ class MergeProjectTest : public QObject {
     window.mergePanel()->SetOptions(QuickMerge());
     QVERIFY(window.mergePanel()->Run());
     QVERIFY(WaitForJob(window, 300000));
-    const scanreg::merge::Mesh* mesh = window.mergePanel()->mesh();
-    QVERIFY(mesh != nullptr);
-    const auto triangles = static_cast<vtkIdType>(mesh->triangles.size());
+    QVERIFY(window.mergePanel()->mesh() != nullptr);
+    const auto triangles = static_cast<vtkIdType>(window.mergePanel()->mesh()->triangle_count());
     QVERIFY2(triangles > 1000, qPrintable(QString("%1 triangles").arg(triangles)));
-
-    // The preview: the same triangles, with normals, in the 3D view.
+    // Within the preview budget the 3D view shows the whole mesh: the same triangles, with normals.
+    const scanreg::merge::Mesh* mesh = window.mergePanel()->preview();
+    QVERIFY(mesh != nullptr);
+    QCOMPARE(static_cast<vtkIdType>(mesh->triangles.size()), triangles);
     vtkActor* actor = window.scene()->MeshActor();
     QVERIFY(actor != nullptr);
     auto* poly = vtkPolyData::SafeDownCast(actor->GetMapper()->GetInput());
@@ -260,6 +261,39 @@ class MergeProjectTest : public QObject {
     QCOMPARE(FilesIn(out.path()), QStringList({"mesh.obj", "mesh.ply", "mesh.stl"}));  // no temporary left
     QCOMPARE(window.scene()->CloudActor(name), cloud);  // the exports did not rebuild the clouds
     QVERIFY(!window.dirty());                           // merging does not change the project
+
+    // Beyond the preview budget the view shows the mesh simplified, and Export still writes it whole.
+    window.mergePanel()->SetPreviewTriangles(std::size_t(triangles / 10));
+    QVERIFY(window.mergePanel()->Run());
+    QVERIFY(WaitForJob(window, 300000));
+    QCOMPARE(static_cast<vtkIdType>(window.mergePanel()->mesh()->triangle_count()), triangles);
+    const scanreg::merge::Mesh* simplified = window.mergePanel()->preview();
+    QVERIFY(simplified != nullptr);
+    const auto shown = static_cast<vtkIdType>(simplified->triangles.size());
+    QVERIFY2(shown <= triangles / 10 && shown > triangles / 100,
+             qPrintable(QString("%1 of %2 triangles shown").arg(shown).arg(triangles)));
+    auto* shown_poly = vtkPolyData::SafeDownCast(window.scene()->MeshActor()->GetMapper()->GetInput());
+    QCOMPARE(shown_poly->GetNumberOfPolys(), shown);
+    QVERIFY2(window.mergePanel()->findChild<QLabel*>("MergeSummary")->text().contains("simplified"),
+             qPrintable(window.mergePanel()->findChild<QLabel*>("MergeSummary")->text()));
+    QVERIFY(window.mergePanel()->ExportMesh(out.filePath("whole.ply")));
+    QVERIFY(WaitForJob(window, 120000));
+    QCOMPARE(ReadMesh(out.filePath("whole.ply"))->GetNumberOfPolys(), triangles);
+    // The simplified surface lies on the whole one's: its world bounds within a few of its cells.
+    double whole_bounds[6];
+    ReadMesh(out.filePath("whole.ply"))->GetBounds(whole_bounds);
+    Eigen::Vector3d low = Eigen::Vector3d::Constant(1e300), high = -low;
+    for (const Eigen::Vector3f& v : simplified->vertices) {
+      low = low.cwiseMin(simplified->origin + v.cast<double>());
+      high = high.cwiseMax(simplified->origin + v.cast<double>());
+    }
+    const double cell = 16 * QuickMerge().voxel_m;  // the preview cell is ~4 voxels (a tenth of the triangles)
+    for (int k = 0; k < 3; ++k) {
+      QVERIFY2(std::abs(low[k] - whole_bounds[2 * k]) < cell && std::abs(high[k] - whole_bounds[2 * k + 1]) < cell,
+               qPrintable(QString("axis %1: shown %2..%3, whole %4..%5")
+                              .arg(k).arg(low[k]).arg(high[k]).arg(whole_bounds[2 * k]).arg(whole_bounds[2 * k + 1])));
+    }
+    QVERIFY(QFile::remove(out.filePath("whole.ply")));
 
     // An edit of the registration drops the mesh: it no longer matches the poses.
     window.document()->Edit("move nothing", window.project());
