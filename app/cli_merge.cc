@@ -22,7 +22,9 @@ int RunMerge(const std::vector<std::string>& argv) {
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
-       {"max-memory", true, false, "GB       refuse a merge estimated above this (default: 3/4 of this machine's memory)"},
+       {"max-memory", true, false,
+        "SIZE     refuse a merge estimated above this (e.g. 20G, 900M; a bare number is GB; default: 3/4 of this "
+        "machine's memory)"},
        {"memory-budget", true, false,
         "SIZE     hold at most this much of full scans in memory (e.g. 6G, 800M); the others are read again "
         "from the binary scan cache when a tile needs them (default: a quarter of the RAM). The mesh does not "
@@ -50,9 +52,11 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto max_range = args->GetDouble("max-range", 0.0, 0.0, 1e6);
   if (!max_range) return Fail(max_range.error());
   options.max_range_m = *max_range;
-  auto max_memory = args->GetDouble("max-memory", 0.0, 0.0, 1e6);  // GB; 0 = the default budget
-  if (!max_memory) return Fail(max_memory.error());
-  options.memory_budget_bytes = static_cast<std::size_t>(*max_memory * 1e9);
+  if (auto text = args->Get("max-memory")) {  // the same sizes as --memory-budget's
+    Expected<std::size_t> parsed = pipeline::ParseMemoryBudget(*text);
+    if (!parsed) return Fail(MakeError(parsed.error().code, "merge: --max-memory: " + parsed.error().message));
+    options.memory_budget_bytes = *parsed;
+  }
   std::size_t scan_budget = pipeline::DefaultMemoryBudget();
   if (auto text = args->Get("memory-budget")) {
     Expected<std::size_t> parsed = pipeline::ParseMemoryBudget(*text);

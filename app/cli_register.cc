@@ -185,8 +185,8 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
     PrintText(*result, scans, errors);
     std::printf("scans: read %d times for %zu scans, dense-ICP surfaces built %d times, at most %s of both held "
                 "(memory budget %s)\n",
-                store.reads(), scans.size(), store.surface_builds(), pipeline::FormatBytes(store.peak_bytes()).c_str(),
-                pipeline::FormatBytes(store.budget_bytes()).c_str());
+                store.reads(), scans.size(), store.surface_builds(), FormatBytes(store.peak_bytes()).c_str(),
+                FormatBytes(store.budget_bytes()).c_str());
     PrintGeoref(project, *result);
   }
   int unregistered = 0;

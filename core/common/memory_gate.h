@@ -5,8 +5,12 @@
 #include <condition_variable>
 #include <cstddef>
 #include <mutex>
+#include <string>
 
 namespace scanreg {
+
+// A memory size as the options take it (binary units: 1 GB = 2^30 bytes): "1.2 GB", "850 MB".
+std::string FormatBytes(std::size_t bytes);
 
 class MemoryGate {
  public:

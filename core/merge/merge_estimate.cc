@@ -8,6 +8,7 @@
 #include <thread>
 #include <unordered_map>
 
+#include "core/common/memory_gate.h"
 #include "core/merge/sparse_grid.h"
 
 namespace scanreg::merge {
@@ -104,13 +105,6 @@ MergeEstimate Estimate(const std::vector<const Scan*>& scans, const std::vector<
   return e;
 }
 
-std::string Bytes(double b) {
-  char buf[32];
-  if (b >= 1e9) std::snprintf(buf, sizeof buf, "%.1f GB", b / 1e9);
-  else std::snprintf(buf, sizeof buf, "%.0f MB", std::max(1.0, b / 1e6));
-  return buf;
-}
-
 std::string Duration(double s) {
   char buf[32];
   if (s < 90) std::snprintf(buf, sizeof buf, "%.0f s", std::max(1.0, s));
@@ -123,10 +117,10 @@ std::string Duration(double s) {
 
 std::string MergeEstimate::Describe() const {
   char buf[160];
-  std::snprintf(buf, sizeof buf, "about %s and %s (%s%zu blocks of 8^3 voxels)", Bytes(double(bytes)).c_str(),
+  std::snprintf(buf, sizeof buf, "about %s and %s (%s%zu blocks of 8^3 voxels)", FormatBytes(std::size_t(bytes)).c_str(),
                 Duration(seconds).c_str(), extrapolated ? "~" : "", blocks);
   if (disk_bytes == 0) return buf;
-  return buf + (", the mesh's " + Bytes(double(disk_bytes)) + " on disk");
+  return buf + (", the mesh's " + FormatBytes(std::size_t(disk_bytes)) + " on disk");
 }
 
 MergeEstimate EstimateMerge(const std::vector<const Scan*>& scans, const MergeOptions& options,
@@ -158,8 +152,8 @@ Status CheckMergeFits(const std::vector<const Scan*>& scans, const MergeOptions&
   }
   char voxels[80];
   std::snprintf(voxels, sizeof voxels, "merge: at a voxel of %.4g m the merge needs ", options.voxel_m);
-  std::string what = voxels + estimate->Describe() + ", more than the memory budget of " + Bytes(double(budget)) +
-                     " (--max-memory GB sets it; the default is 3/4 of this machine's memory). ";
+  std::string what = voxels + estimate->Describe() + ", more than the memory budget of " + FormatBytes(std::size_t(budget)) +
+                     " (--max-memory SIZE sets it; the default is 3/4 of this machine's memory). ";
   if (fit.bytes <= budget) {
     // Two significant digits, rounded up (a smaller voxel needs more memory).
     const double unit = std::pow(10.0, std::floor(std::log10(voxel)) - 1.0);

@@ -116,20 +116,19 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
       return fits.error();
   }
   LogInfo("merge of " + std::to_string(which.size()) + " scans: " + estimate.Describe());
-  if (spill && estimate.disk_bytes > 0) {  // refused now rather than on a full disk an hour later
+  if (spill && estimate.disk_bytes > 0) {  // refused now rather than on a full disk hours later
+    // The output is written beside the temporary files while they exist: a PLY about 1.4 times their
+    // size (doubles for the vertices' floats), so both must fit.
+    const double needed = 2.4 * double(estimate.disk_bytes);
     std::error_code failed;
     const std::filesystem::space_info space = std::filesystem::space(spill->directory(), failed);
-    if (!failed && space.available < estimate.disk_bytes) {
+    if (!failed && double(space.available) < needed) {
       return MakeError(ErrorCode::kInvalidArgument,
                        "merge: the mesh needs about " + FormatBytes(estimate.disk_bytes) + " of temporary files in " +
-                           spill->directory().string() + " (and the output about 1.4 times as much), but only " +
-                           FormatBytes(space.available) +
+                           spill->directory().string() + " and about " +
+                           FormatBytes(std::size_t(needed) - estimate.disk_bytes) +
+                           " more for the output written beside them, but only " + FormatBytes(space.available) +
                            " is free there; free some space, write the mesh elsewhere, or use a larger --voxel");
-    }
-    if (!failed && double(space.available) < 2.5 * double(estimate.disk_bytes)) {
-      LogWarning("merge: " + FormatBytes(space.available) + " free in " + spill->directory().string() +
-                 " may not hold the mesh's temporary files (about " + FormatBytes(estimate.disk_bytes) +
-                 ") and the output");
     }
   }
   std::vector<Eigen::Isometry3d> poses;

@@ -44,15 +44,6 @@ Expected<std::size_t> ParseMemoryBudget(const std::string& text) {
   return static_cast<std::size_t>(bytes);
 }
 
-std::string FormatBytes(std::size_t bytes) {
-  char buf[32];
-  if (bytes >= (std::size_t(1) << 30)) {
-    std::snprintf(buf, sizeof buf, "%.1f GB", bytes / double(1 << 30));
-  } else {
-    std::snprintf(buf, sizeof buf, "%.0f MB", bytes / double(1 << 20));
-  }
-  return buf;
-}
 
 Scan ScanHead(const Scan& scan) {
   Scan head;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/common/expected.h"
+#include "core/common/memory_gate.h"  // FormatBytes
 #include "core/common/progress.h"
 #include "core/geometry/scan.h"
 #include "core/io/project.h"
@@ -32,8 +33,6 @@ std::size_t ScanBytes(const Scan& scan);
 std::size_t DefaultMemoryBudget();
 // "6G", "800M", "1.5G", "2T" (binary units; a bare number is gigabytes). Errors say what is accepted.
 Expected<std::size_t> ParseMemoryBudget(const std::string& text);
-// "1.2 GB", "850 MB".
-std::string FormatBytes(std::size_t bytes);
 
 class ScanStore {
  public:

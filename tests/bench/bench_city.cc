@@ -150,8 +150,8 @@ void RunCityBench(Table& table, bool quick) {
       char same[80] = "no in-memory run to compare";
       if (!in_memory_poses.empty()) std::snprintf(same, sizeof same, "poses within %.2g mm of the in-memory run", moved * 1e3);
       std::snprintf(note, sizeof note, "%d reads of %d scans, %d surface builds, at most %s held (budget %s); %s",
-                    store->reads(), n, store->surface_builds(), pipeline::FormatBytes(store->peak_bytes()).c_str(),
-                    pipeline::FormatBytes(store->budget_bytes()).c_str(), same);
+                    store->reads(), n, store->surface_builds(), FormatBytes(store->peak_bytes()).c_str(),
+                    FormatBytes(store->budget_bytes()).c_str(), same);
       table.Add({kSection, label + ": peak resident memory", PeakMemoryMiB(), "MiB", note});
     } else if (candidates == 10 && global) {
       for (const auto& s : r->scans) in_memory_poses.push_back(s.world_from_scan);
@@ -218,9 +218,9 @@ void RunBigScansBench(Table& table, bool quick) {
   table.Add({kBig, size + ": peak resident memory", PeakMemoryMiB(), "MiB",
              std::to_string(store.reads()) + " reads of " + std::to_string(n) + " scans, " +
                  std::to_string(store.surface_builds()) + " surface builds, at most " +
-                 pipeline::FormatBytes(store.peak_bytes()) + " held (budget " +
-                 pipeline::FormatBytes(store.budget_bytes()) + "); the scans take " +
-                 pipeline::FormatBytes(disk.all_bytes)});
+                 FormatBytes(store.peak_bytes()) + " held (budget " +
+                 FormatBytes(store.budget_bytes()) + "); the scans take " +
+                 FormatBytes(disk.all_bytes)});
   table.Add({kBig, size + ": worst position error", e.worst_m * 1000, "mm",
              Fmt("%.0f of %.0f registered; median %.1f mm", e.registered, n, e.median_m * 1000)});
 }
