@@ -1,0 +1,241 @@
+#include "core/pipeline/tree_walk.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/common/log.h"
+#include "core/geometry/transform.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+Error Cancelled() { return MakeError(ErrorCode::kCancelled, "registration cancelled"); }
+
+// The scans came with poses of their own (from their files or placed by hand) when no two share one;
+// projects read without poses have every scan at the identity.
+bool HavePriorPoses(const std::vector<Scan>& scans) {
+  for (std::size_t i = 0; i < scans.size(); ++i)
+    for (std::size_t j = i + 1; j < scans.size(); ++j)
+      if (scans[i].world_from_scan.isApprox(scans[j].world_from_scan, 1e-9)) return false;
+  return scans.size() > 1;
+}
+
+// Partners by position (issue 11 item 4): the placed scans nearest to where an unplaced scan
+// probably stands — its own prior pose when the scans have priors, else beside its neighbours in
+// capture order (stations are set up one after the other) — nearest first, at most max_count.
+std::vector<int> PositionPartners(int x, const std::vector<Scan>& scans, const std::vector<bool>& placed,
+                                  const std::vector<Eigen::Isometry3d>& world, bool priors, int max_count) {
+  const int n = static_cast<int>(scans.size());
+  std::vector<Eigen::Vector3d> anchors;
+  if (priors) anchors.push_back(scans[x].world_from_scan.translation());
+  for (int q : {x - 1, x + 1})
+    if (q >= 0 && q < n && placed[q]) anchors.push_back(world[q].translation());
+  std::vector<std::pair<double, int>> by_distance;
+  for (int p = 0; p < n; ++p) {
+    if (!placed[p] || anchors.empty()) continue;
+    double d = INFINITY;
+    for (const Eigen::Vector3d& a : anchors) d = std::min(d, (world[p].translation() - a).norm());
+    by_distance.emplace_back(d, p);
+  }
+  std::sort(by_distance.begin(), by_distance.end());
+  std::vector<int> out;
+  for (const auto& [d, p] : by_distance)
+    if (static_cast<int>(out.size()) < max_count) out.push_back(p);
+  return out;
+}
+
+class Walker {
+ public:
+  Walker(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
+         const RegisterOptions& options, const CancelToken& cancel, PairBook& book)
+      : scans_(scans), choices_(choices), source_(source), options_(options), cancel_(cancel), book_(book),
+        n_(static_cast<int>(scans.size())), priors_(HavePriorPoses(scans)), position_tried_(n_, false) {
+    walk_.world.assign(n_, Eigen::Isometry3d::Identity());
+    walk_.checked_with.assign(n_, -1);
+    walk_.weights = source.weights;
+  }
+
+  Expected<TreeWalk> Run() {
+    for (int round = 0; round < 4 * n_ * n_; ++round) {
+      Expected<ScanOrder> o = ComputeScanOrder(walk_.weights, choices_.root, choices_.overrides, book_.excluded(),
+                                               source_.min_weight);
+      if (!o) return o.error();
+      walk_.order = *o;
+      const bool changed = PlaceAlongTree();
+      if (cancel_.IsCancelled()) return Cancelled();
+      if (changed) continue;
+      if (!source_.loop_checks || !options_.verify_loops) {
+        if (AddPositionPartners()) continue;
+        break;
+      }
+      if (!CheckLoops() && !AddPositionPartners()) break;
+      if (cancel_.IsCancelled()) return Cancelled();
+    }
+    return walk_;
+  }
+
+ private:
+  const ScanOrder& order() const { return walk_.order; }
+
+  // Registers the tree's links in placement order and chains the world poses; true when a link
+  // failed (it is excluded: the tree must be recomputed).
+  bool PlaceAlongTree() {
+    std::vector<std::pair<int, int>> tree_edges;
+    for (int child : order().order)
+      if (order().parent[child] >= 0) tree_edges.emplace_back(order().parent[child], child);
+    book_.RegisterAhead(tree_edges);
+    for (int child : order().order) {
+      const int parent = order().parent[child];
+      if (parent < 0) continue;
+      if (cancel_.IsCancelled()) return false;
+      if (book_.Link(parent, child).link.status == io::LinkStatus::kFailed) {
+        book_.Exclude(parent, child);
+        return true;
+      }
+      walk_.world[child] = walk_.world[parent] * book_.At(parent, child).link.parent_from_child;
+    }
+    return false;
+  }
+
+  // Once the tree has settled, each scan it leaves out gets its partners by position as edges of the
+  // lowest weights (they join only scans no link with matches placed); false when none is new.
+  bool AddPositionPartners() {
+    if (source_.position_partners <= 0) return false;
+    std::vector<bool> placed(n_, false);
+    for (int i = 0; i < n_; ++i) placed[i] = i == order().root || order().parent[i] >= 0;
+    bool added = false;
+    for (int x = 0; x < n_; ++x) {
+      if (placed[x] || position_tried_[x] || choices_.overrides[x]) continue;
+      position_tried_[x] = true;
+      const std::vector<int> partners = PositionPartners(x, scans_, placed, walk_.world, priors_, source_.position_partners);
+      for (std::size_t rank = 0; rank < partners.size(); ++rank) {
+        const int p = partners[rank];
+        if (book_.Excluded(p, x) || book_.Has(p, x) || walk_.weights(p, x) >= source_.min_weight) continue;
+        walk_.weights(p, x) = source_.min_weight + static_cast<int>(partners.size() - 1 - rank);  // nearest first
+        LogInfo(scans_[x].name + ": no link by matches; trying " + scans_[p].name + " by position");
+        added = true;
+      }
+    }
+    return added;
+  }
+
+  bool CheckAll() const { return options_.verify_all_links || options_.global; }  // the graph needs the extra links
+
+  // The check partners of a tree link, best first: the best one only, or every one until a loop
+  // closes when the link needs one. Empty when the link is not to be checked.
+  std::vector<std::pair<int, int>> CheckPartners(int child) const {
+    std::vector<std::pair<int, int>> partners;  // (-weight, scan)
+    const int parent = order().parent[child];
+    if (parent < 0 || choices_.kept.count({parent, child})) return partners;  // the user's link: never failed by a check
+    const PairResult* link = book_.Find(parent, child);
+    const bool needs_loop = link->needs_loop;
+    if (!CheckAll() && !needs_loop && link->link.status == io::LinkStatus::kOk) return partners;
+    // A loop that confirms a link leaves the child's subtree: a scan placed through the child
+    // closes a loop of the subtree's own links, whatever the link to the parent is.
+    auto below_child = [&](int q) {
+      for (int a = q; a >= 0; a = order().parent[a])
+        if (a == child) return true;
+      return false;
+    };
+    for (int q : order().order) {
+      if (q == child || q == parent || order().parent[q] == child || (needs_loop && below_child(q))) continue;
+      if (book_.Excluded(q, child)) continue;
+      const int w = std::max(walk_.weights(q, child), walk_.weights(child, q));
+      if (w >= source_.min_check_weight) partners.emplace_back(-w, q);
+    }
+    std::stable_sort(partners.begin(), partners.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (!needs_loop && partners.size() > 1) partners.resize(1);
+    return partners;
+  }
+
+  // Loop check (beyond W): register each scan also to its best other placed neighbour and compare
+  // with the tree. Both links of a cycle that does not close are failed: a pairwise registration
+  // can be self-consistent and wrong (repeated façades), a closed loop rarely is. True when a link
+  // failed (the tree must be recomputed).
+  bool CheckLoops() {
+    std::vector<std::pair<int, int>> first_checks;  // each link's first check, unless the reverse serves
+    for (int child : order().order) {
+      const std::vector<std::pair<int, int>> partners = CheckPartners(child);
+      if (partners.empty()) continue;
+      const PairResult* reverse = book_.Find(child, partners.front().second);
+      if (!reverse || reverse->link.status == io::LinkStatus::kFailed)
+        first_checks.emplace_back(partners.front().second, child);
+    }
+    book_.RegisterAhead(first_checks);
+    // The links that need a loop are checked first: a wrong one (a plan-view pose on a parallel
+    // street) fails its own check, before the loops of sound links through the scans it misplaced
+    // open and fail those links instead.
+    std::vector<int> check_order;
+    for (int pass = 0; pass < 2; ++pass)
+      for (int child : order().order)
+        if (order().parent[child] >= 0 && book_.At(order().parent[child], child).needs_loop == (pass == 0))
+          check_order.push_back(child);
+    for (int child : check_order)
+      if (CheckLink(child)) return true;
+    return false;
+  }
+
+  // Checks the tree link of `child`; true when it (and maybe its check) failed.
+  bool CheckLink(int child) {
+    const int parent = order().parent[child];
+    if (choices_.kept.count({parent, child})) return false;  // the user's link: never failed by a check
+    const bool needs_loop = book_.At(parent, child).needs_loop;
+    if (!CheckAll() && !needs_loop && book_.At(parent, child).link.status == io::LinkStatus::kOk) return false;
+    const std::vector<std::pair<int, int>> partners = CheckPartners(child);
+    const std::vector<Eigen::Isometry3d>& world = walk_.world;
+    for (const auto& [neg_weight, best] : partners) {
+      // A check already made the other way round serves (inverted).
+      const PairResult* reverse = book_.Find(child, best);
+      const bool use_reverse = reverse && reverse->link.status != io::LinkStatus::kFailed;
+      const PairResult& check = use_reverse ? *reverse : book_.Link(best, child);
+      if (check.link.status == io::LinkStatus::kFailed) continue;
+      const Eigen::Isometry3d best_from_child =
+          use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
+      if (!use_reverse) walk_.checked_with[child] = best;
+      const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
+      if (gap.position_m <= options_.loop_tolerance_m && gap.angle_rad <= options_.loop_tolerance_rad) {
+        // A check that itself needs a loop does not confirm one: two plan-view poses from
+        // neighbouring scans agree on the same wrong street as readily as on the right one.
+        if (needs_loop && check.needs_loop) continue;
+        return false;  // closed
+      }
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans_[parent].name.c_str(),
+                    scans_[child].name.c_str(), scans_[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
+      // Both links are failed — unless only the link checked needs a loop: then it is the suspect,
+      // and the sound check stays (it may place the child once the suspect is gone).
+      const bool only_suspect = needs_loop && !check.needs_loop;
+      LogWarning(std::string(buf) + (only_suspect ? "; the link that needed a loop failed" : "; both links failed"));
+      book_.Fail(parent, child, buf);
+      if (!only_suspect) book_.Fail(use_reverse ? child : best, use_reverse ? best : child, buf);
+      return true;
+    }
+    if (needs_loop) {
+      const std::string why = book_.At(parent, child).link.reason;
+      book_.Fail(parent, child, why.substr(0, why.find("; a loop")) + "; no loop through another scan confirms it");
+      return true;
+    }
+    return false;
+  }
+
+  const std::vector<Scan>& scans_;
+  const ScanOrderChoices& choices_;
+  const LinkSource& source_;
+  const RegisterOptions& options_;
+  const CancelToken& cancel_;
+  PairBook& book_;
+  const int n_;
+  const bool priors_;
+  std::vector<bool> position_tried_;
+  TreeWalk walk_;
+};
+
+}  // namespace
+
+Expected<TreeWalk> WalkTree(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
+                            const RegisterOptions& options, const CancelToken& cancel, PairBook& book) {
+  return Walker(scans, choices, source, options, cancel, book).Run();
+}
+
+}  // namespace scanreg::pipeline
