@@ -56,13 +56,27 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   }
   bool any_reference = false;
   for (const auto& e : errors) any_reference |= e.available;
+  const bool consistency = r.consistency.measured;
+  if (consistency) {
+    std::printf("\nconsistency (no ground truth): robust RMS of the point-to-plane residuals over %d overlapping pairs "
+                "(capped at %.2f mm): %.3f mm at the start poses -> %.3f mm%s%s\n",
+                r.consistency.pairs, 1e3 * r.consistency.cutoff_m, 1e3 * r.consistency.start_rms_m,
+                1e3 * r.consistency.result_rms_m, r.consistency.multiview ? " (multi-view fine step)" : "",
+                r.consistency.refused ? "; less consistent than the start: REFUSED, the start poses are kept" : "");
+  }
   std::printf("\n%-8s %-13s", "scan", "status");
+  if (consistency) std::printf(" %9s %9s %8s", "start mm", "resid mm", "cond");
   if (any_reference) std::printf(" %12s %12s %12s %12s", "coarse mm", "coarse deg", "fine mm", "fine deg");
   std::printf("\n");
   for (std::size_t i = 0; i < r.scans.size(); ++i) {
     const auto& s = r.scans[i];
     std::printf("%-8s %-13s", s.name.c_str(),
                 s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered") : "UNREGISTERED");
+    if (consistency) {
+      auto mm = [](double v) { return v < 0 ? std::string("-") : std::to_string(1e3 * v).substr(0, 6); };
+      const std::string cond = s.conditioning < 0 ? "-" : std::to_string(s.conditioning).substr(0, 6);
+      std::printf(" %9s %9s %8s", mm(s.start_consistency_m).c_str(), mm(s.consistency_m).c_str(), cond.c_str());
+    }
     if (any_reference && errors[i].available) {
       if (errors[i].has_coarse) {
         std::printf(" %12.1f %12.4f", errors[i].coarse_position_m * 1000, errors[i].coarse_angle_rad * kDeg);
@@ -130,6 +144,11 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
             {"parent", s.parent >= 0 ? json(scans[s.parent].name) : json(nullptr)},
             {"reason", s.reason},
             {"world_from_scan", std::vector<double>(m.begin(), m.end())}};
+    if (r.consistency.measured) {
+      js["start_consistency_m"] = s.start_consistency_m;
+      js["consistency_m"] = s.consistency_m;
+      js["conditioning"] = s.conditioning;
+    }
     if (errors[i].available) {
       js["error_position_m"] = errors[i].position_m;
       js["error_angle_deg"] = errors[i].angle_rad * kDeg;
@@ -142,7 +161,7 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
   }
   std::vector<std::string> names;
   for (const Scan& s : scans) names.push_back(s.name);
-  return json{{"scans", out_scans},
+  json out = json{{"scans", out_scans},
               {"names", names},
               {"root", scans[r.root].name},
               {"confusion", confusion},
@@ -155,6 +174,15 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
                 {"matching", r.seconds_matching},
                 {"pairs", r.seconds_pairs},
                 {"total", r.seconds_total}}}};
+  if (r.consistency.measured) {
+    out["consistency"] = {{"pairs", r.consistency.pairs},
+                          {"cutoff_m", r.consistency.cutoff_m},
+                          {"start_rms_m", r.consistency.start_rms_m},
+                          {"result_rms_m", r.consistency.result_rms_m},
+                          {"multiview", r.consistency.multiview},
+                          {"refused", r.consistency.refused}};
+  }
+  return out;
 }
 
 }  // namespace
@@ -234,6 +262,10 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"global", false, false,
         "       global registration: pose graph over every link, all links loop-checked (default)"},
        {"no-global", false, false, "       no global registration: chain the pairwise links along the tree only"},
+       {"multiview", false, false,
+        "       with --coarse none: after the pose graph, one fine step over every overlapping pair at once, "
+        "taken when it is more consistent (default)"},
+       {"no-multiview", false, false, "       with --coarse none: the pose graph's poses only"},
        {"keep-imported", false, false,
         "       keep the imported poses (from --poses or the scan files' headers) fixed "
         "and place the other scans relative to them"},
@@ -273,7 +305,8 @@ int RunRegister(const std::vector<std::string>& argv) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "register: give exactly one project file"));
   }
   for (const auto& [yes, no] :
-       {std::make_pair("global", "no-global"), std::make_pair("keep-imported", "refine-imported")}) {
+       {std::make_pair("global", "no-global"), std::make_pair("multiview", "no-multiview"),
+        std::make_pair("keep-imported", "refine-imported")}) {
     if (args->Has(yes) && args->Has(no)) {
       return Fail(MakeError(ErrorCode::kInvalidArgument,
                             std::string("register: give --") + yes + " or --" + no + ", not both"));

@@ -12,6 +12,7 @@
 #include "core/pipeline/register_pair.h"
 #include "core/pipeline/registration_driver.h"
 #include "core/pipeline/scale_defaults.h"
+#include "core/pipeline/verify_poses.h"
 #include "core/registration/point_index.h"
 #include "core/registration/voxel_filter.h"
 
@@ -109,6 +110,26 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
                                  100 * options.thresholds.min_overlap, options.overlap_distance_m);
   SubProgress pair_progress(progress, 0.05, 0.95);
   if (Status s = DriveRegistration(scans, *choices, source, options, pair_progress, cancel, &result); !s) {
+    return s.error();
+  }
+  // Registered means verified: the multi-view step, and every pose against its start (issue 33).
+  // Samples at half the data's overlap distance: fine enough that a sample's nearest neighbour on the
+  // other surface lies on its tangent plane (the refinement's samples follow the reach, maybe coarse).
+  std::vector<std::vector<Eigen::Vector3d>> samples(n);
+  for (int i = 0; i < n; ++i) {
+    std::vector<Eigen::Vector3d> pts;
+    for (std::size_t k = 0; k < scans[i].size(); ++k)
+      if (scans[i].valid[k]) pts.push_back(scans[i].points[k].cast<double>());
+    samples[i] = VoxelDownsample(pts, 0.5 * evidence_m);
+  }
+  VerifyOptions verify;
+  verify.cutoff_m = evidence_m;
+  verify.evidence_m = evidence_m;
+  verify.noise_m = options.range_sigma_m;
+  verify.min_overlap = options.thresholds.min_overlap;
+  verify.multiview = options.multiview;
+  SubProgress verify_progress(progress, 0.95, 1.0);
+  if (Status s = VerifyAgainstStart(scans, samples, *choices, verify, verify_progress, cancel, &result); !s) {
     return s.error();
   }
   result.seconds_total = Since(t_start);

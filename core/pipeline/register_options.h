@@ -90,6 +90,10 @@ struct RegisterOptions {
   // none: 0.91 -> 0.57 mm (0.55 before its links were loop-checked). Costs about one more pair
   // registration per scan.
   bool global = true;
+  // Refinement from the current poses (issue 33): after the pose graph, the multi-view fine step
+  // (all scans at once over every overlapping pair, core/registration/multiview.h) — its poses are
+  // taken when they are more consistent than the graph's (core/pipeline/verify_poses.h).
+  bool multiview = true;
   // --coarse none: no features; refine from the scans' current world_from_scan (a .conf file, a
   // previous run). Links: the pairs whose surfaces overlap at those poses (core/pipeline/refine_project.h;
   // both paths run the one driver of core/pipeline/registration_driver.h).

@@ -31,6 +31,20 @@ struct ScanRegistration {
   Eigen::Isometry3d cluster_from_scan = Eigen::Isometry3d::Identity();
   bool has_coarse = false;  // world pose from the coarse links only (W fig. 6 "after coarse")
   Eigen::Isometry3d coarse_world_from_scan = Eigen::Isometry3d::Identity();
+  // The scan's share of the project's consistency (verify_poses.h) at the start poses and at its
+  // result, and how well its overlaps constrain its pose (1: every direction alike; near 0: one is
+  // free); negative when not measured.
+  double start_consistency_m = -1, consistency_m = -1, conditioning = -1;
+};
+
+// How consistent the poses are without ground truth (verify_poses.h), at the start and as returned.
+struct ConsistencyCheck {
+  bool measured = false;
+  double start_rms_m = 0, result_rms_m = 0;  // robust RMS of the point-to-plane residuals of every overlapping pair
+  double cutoff_m = 0;                       // residuals capped here
+  int pairs = 0;
+  bool multiview = false;  // the multi-view fine step's poses were taken
+  bool refused = false;    // the result was less consistent than the start: the start poses were kept
 };
 
 struct ProjectRegistration {
@@ -46,6 +60,7 @@ struct ProjectRegistration {
     bool down_weighted = false;
   };
   std::vector<GlobalLink> global_links;
+  ConsistencyCheck consistency;
   // Georeferencing (issue 15), run when the project has control points: whether it placed the
   // project in the control frame, and why not. The residuals are in io::Project::georef.
   bool georeferenced = false;

@@ -80,6 +80,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.noise_m", "noise", "range noise (m; 0: from the data)", {}},
       {"register.overlap_distance_m", "overlap-distance", "overlap distance (m; 0: from the data)", {}},
       {"register.global", "global", "global registration", {}, true},
+      {"register.multiview", "multiview", "multi-view fine step (refinement from current poses)", {}, true},
       {"register.keep_imported", "keep-imported", "keep imported poses fixed", {}, true},
       {"register.sphere_radius_m", "sphere-radius", "sphere target radius (m)", {}},
       {"register.checker_size_m", "checker-size", "checkerboard target size (m; 0: none)", {}},
@@ -100,6 +101,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.noise_m") return Number(o.range_sigma_m);
   if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
   if (key == "register.global") return o.global ? "true" : "false";
+  if (key == "register.multiview") return o.multiview ? "true" : "false";
   if (key == "register.keep_imported") return o.keep_imported ? "true" : "false";
   if (key == "register.sphere_radius_m") return Number(o.spheres.radius_m);
   if (key == "register.checker_size_m") return Number(o.checkers.size_m);
@@ -114,7 +116,7 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   const std::string key = s.key;
   if (s.boolean) {
     if (value != "true" && value != "false") return Bad(s, value, "give true or false");
-    (key == "register.global" ? o->global : o->keep_imported) = value == "true";
+    (key == "register.global" ? o->global : key == "register.multiview" ? o->multiview : o->keep_imported) = value == "true";
     return Status::Ok();
   }
   if (key == "register.coarse") {

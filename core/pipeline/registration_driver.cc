@@ -208,23 +208,7 @@ Status RunGlobalStep(const std::vector<Scan>& scans, const ScanOrderChoices& cho
     result->links.push_back(l);
   }
   if (Status g = RunGlobalRegistration(scans, cancel, result); !g) return g;
-  // The user's links hold exactly: the graph may not bend them. Parents first, each kept child
-  // and the scans under it move back onto its link.
-  auto under = [&](int d, int top) {
-    for (int steps = 0; d >= 0 && steps <= n; ++steps, d = order.parent[d])
-      if (d == top) return true;
-    return false;
-  };
-  for (int child : order.order) {
-    const int parent = order.parent[child];
-    const auto kept = choices.kept.find({parent, child});
-    if (parent < 0 || kept == choices.kept.end()) continue;
-    const Eigen::Isometry3d delta = result->scans[parent].world_from_scan * kept->second.parent_from_child *
-                                    result->scans[child].world_from_scan.inverse();
-    for (int d = 0; d < n; ++d)
-      if (result->scans[d].registered && under(d, child))
-        result->scans[d].world_from_scan = delta * result->scans[d].world_from_scan;
-  }
+  HoldKeptLinks(choices, result);
   return Status::Ok();
 }
 
@@ -248,6 +232,32 @@ void ExplainLeftOut(const std::vector<Scan>& scans, const ScanOrderChoices& choi
 }
 
 }  // namespace
+
+void HoldKeptLinks(const ScanOrderChoices& choices, ProjectRegistration* result) {
+  const int n = static_cast<int>(result->scans.size());
+  auto under = [&](int d, int top) {
+    for (int steps = 0; d >= 0 && steps <= n; ++steps, d = result->scans[d].parent)
+      if (d == top) return true;
+    return false;
+  };
+  std::vector<int> order;  // parents first
+  std::vector<bool> listed(n, false);
+  for (int round = 0; round <= n; ++round)
+    for (int i = 0; i < n; ++i) {
+      const int p = result->scans[i].parent;
+      if (!listed[i] && result->scans[i].registered && (p < 0 || listed[p])) listed[i] = true, order.push_back(i);
+    }
+  for (int child : order) {
+    const int parent = result->scans[child].parent;
+    const auto kept = choices.kept.find({parent, child});
+    if (parent < 0 || kept == choices.kept.end()) continue;
+    const Eigen::Isometry3d delta = result->scans[parent].world_from_scan * kept->second.parent_from_child *
+                                    result->scans[child].world_from_scan.inverse();
+    for (int d = 0; d < n; ++d)
+      if (result->scans[d].registered && under(d, child))
+        result->scans[d].world_from_scan = delta * result->scans[d].world_from_scan;
+  }
+}
 
 Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const LinkSource& source,
                          const RegisterOptions& options, ProgressSink& progress, const CancelToken& cancel,

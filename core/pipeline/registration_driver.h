@@ -64,4 +64,8 @@ Status DriveRegistration(const std::vector<Scan>& scans, const ScanOrderChoices&
                          const RegisterOptions& options, ProgressSink& progress, const CancelToken& cancel,
                          ProjectRegistration* result);
 
+// The user's links hold exactly (after a step that moves every scan, e.g. the pose graph): parents
+// first, each child of a kept link and the scans under it move back onto its link.
+void HoldKeptLinks(const ScanOrderChoices& choices, ProjectRegistration* result);
+
 }  // namespace scanreg::pipeline
