@@ -51,6 +51,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     pairwise[i] = registered[i] ? result->scans[i].world_from_scan : start[i];
   }
   Poses taken = pairwise;
+  const double scale = options.scale_factor * options.cutoff_m;  // the bounded loss's scale
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "registration cancelled");
 
   // The multi-view fine step over the registered scans, from the pairwise result.
@@ -78,7 +79,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   if (!multiview.empty()) sets.push_back(multiview);
   const auto pairs = OverlappingPairs(views, sets, all, options.evidence_m, options.min_overlap);
   progress.Report(0.6, "measuring the consistency of " + std::to_string(pairs.size()) + " overlapping pairs");
-  std::vector<Consistency> measured = MeasureConsistency(views, sets, pairs, options.cutoff_m, options.evidence_m);
+  std::vector<Consistency> measured = MeasureConsistency(views, sets, pairs, options.cutoff_m, scale);
   ConsistencyCheck& check = result->consistency;
   check.measured = true;
   check.cutoff_m = options.cutoff_m;
@@ -125,7 +126,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     FailPlacingLink(scans, worst, why, result);
     taken[worst] = start[worst];
     result->scans[worst].world_from_scan = start[worst];
-    current = MeasureConsistency(views, {taken}, pairs, options.cutoff_m, options.evidence_m)[0];
+    current = MeasureConsistency(views, {taken}, pairs, options.cutoff_m, scale)[0];
   }
   // The whole no worse than the start.
   if (current.rms_m > check.start_rms_m) {
@@ -155,21 +156,35 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   // always well inside the cutoff, where a misplaced scan's residuals pile up.
   // Measured over the samples that meet the other surface at these poses only (the comparison with
   // the start also counts the samples that met at the start poses, which may be spurious there).
-  const Consistency own = MeasureConsistency(views, {taken}, final_pairs, options.cutoff_m, options.evidence_m)[0];
-  const Consistency own_start = MeasureConsistency(
-      views, {start}, OverlappingPairs(views, {start}, all, options.evidence_m, options.min_overlap), options.cutoff_m,
-      options.evidence_m)[0];
+  // Each scan's agreement: the median over its pairs of the RMS of the residuals that meet at these
+  // poses (a misplaced neighbour spoils one of its pairs, not its median).
+  auto agreement = [&](const Poses& poses, const std::vector<bool>& used) {
+    const auto pairs_here = OverlappingPairs(views, {poses}, used, options.evidence_m, options.min_overlap);
+    const Consistency c = MeasureConsistency(views, {poses}, pairs_here, options.cutoff_m, scale)[0];
+    std::vector<double> out(n, -1.0);
+    for (int i = 0; i < n; ++i) {
+      std::vector<double> mine;
+      for (std::size_t p = 0; p < pairs_here.size(); ++p)
+        if ((pairs_here[p].first == i || pairs_here[p].second == i) && c.pair_rms_m[p] >= 0) mine.push_back(c.pair_rms_m[p]);
+      if (mine.empty()) continue;
+      std::nth_element(mine.begin(), mine.begin() + mine.size() / 2, mine.end());
+      out[i] = mine[mine.size() / 2];
+    }
+    return out;
+  };
+  const std::vector<double> own = agreement(taken, registered);
+  const std::vector<double> own_start = agreement(start, all);
   std::vector<double> shares;
   for (int i = 0; i < n; ++i)
-    if (result->scans[i].registered && own.scan_samples[i] > 0) shares.push_back(own.scan_rms_m[i]);
+    if (result->scans[i].registered && own[i] >= 0) shares.push_back(own[i]);
   std::nth_element(shares.begin(), shares.begin() + shares.size() / 2, shares.end());
   const double median_share = shares.empty() ? 0.0 : shares[shares.size() / 2];
   const double max_share = std::min(std::max(options.noise_factor * options.noise_m, options.spread_factor * median_share),
                                     0.5 * options.cutoff_m);
   for (int i = 0; i < n; ++i) {
     ScanRegistration& s = result->scans[i];
-    s.start_consistency_m = own_start.scan_samples[i] > 0 ? own_start.scan_rms_m[i] : -1;
-    s.consistency_m = own.scan_samples[i] > 0 ? own.scan_rms_m[i] : -1;
+    s.start_consistency_m = own_start[i];
+    s.consistency_m = own[i];
     s.conditioning = fixed[i] ? -1 : conditioning[i];
     if (!s.registered || i == result->root) continue;
     bool kept = false;

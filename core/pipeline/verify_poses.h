@@ -24,7 +24,8 @@
 namespace scanreg::pipeline {
 
 struct VerifyOptions {
-  double cutoff_m = 0;        // residuals capped here (the data's overlap distance)
+  double cutoff_m = 0;        // a sample meets the other surface within this (the data's overlap distance)
+  double scale_factor = 0.25;  // the bounded loss's scale, x cutoff_m
   double evidence_m = 0;      // the data's overlap distance: pairs overlap, and the multi-view step starts, within it
   double noise_m = 0;         // the scanner's range noise
   double min_overlap = 0.05;  // a pair overlaps from this share of samples on

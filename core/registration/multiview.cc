@@ -121,12 +121,15 @@ std::vector<std::pair<int, int>> OverlappingPairs(const std::vector<const ViewSu
 std::vector<Consistency> MeasureConsistency(const std::vector<const ViewSurface*>& views,
                                             const std::vector<Poses>& pose_sets,
                                             const std::vector<std::pair<int, int>>& pairs, double cutoff_m,
-                                            double tangent_m) {
+                                            double scale_m) {
   const int n = static_cast<int>(views.size());
   const int sets = static_cast<int>(pose_sets.size());
-  // Per directed pair and pose set: sum of squared capped residuals and the sample count.
+  const double s2 = scale_m * scale_m;
+  // Per directed pair and pose set: the summed loss over the samples met at any set, and the squared
+  // residuals of the samples met at that set.
   struct Sum {
-    std::vector<double> sq;
+    std::vector<double> loss, sq;
+    std::vector<long> met;
     long count = 0;
   };
   std::vector<Sum> sums(2 * pairs.size());
@@ -139,46 +142,66 @@ std::vector<Consistency> MeasureConsistency(const std::vector<const ViewSurface*
     std::vector<Eigen::Isometry3d> i_from_j(sets);
     for (int s = 0; s < sets; ++s) i_from_j[s] = pose_sets[s][i].inverse() * pose_sets[s][j];
     Sum sum;
+    sum.loss.assign(sets, 0.0);
     sum.sq.assign(sets, 0.0);
+    sum.met.assign(sets, 0);
     std::vector<double> r(sets);
+    std::vector<char> hit(sets);
     for (int idx : Strided(vj.points.size(), 4000)) {
       if (vj.normals[idx].isZero()) continue;
-      bool met = false;
+      bool any = false;
       for (int s = 0; s < sets; ++s) {
         const Eigen::Vector3d p = i_from_j[s] * vj.points[idx];
-        if (Meet(vi, p, i_from_j[s].linear() * vj.normals[idx], cutoff_m, tangent_m, &r[s]) < 0) {
-          r[s] = cutoff_m;
+        hit[s] = Meet(vi, p, i_from_j[s].linear() * vj.normals[idx], cutoff_m, cutoff_m, &r[s]) >= 0;
+        any |= hit[s] != 0;
+      }
+      if (!any) continue;
+      for (int s = 0; s < sets; ++s) {
+        if (!hit[s]) {
+          sum.loss[s] += 1.0;  // met at another pose set, not at this one: the bounded loss's ceiling
           continue;
         }
-        met = true;
-        r[s] = std::min(std::abs(r[s]), cutoff_m);
+        const double r2 = r[s] * r[s];
+        sum.loss[s] += r2 / (r2 + s2);
+        sum.sq[s] += r2;
+        ++sum.met[s];
       }
-      if (!met) continue;
-      for (int s = 0; s < sets; ++s) sum.sq[s] += r[s] * r[s];
       ++sum.count;
     }
     sums[k] = std::move(sum);
   }
+  // Mean Geman-McClure loss m -> the RMS of residuals that would all give it: s sqrt(m / (1 - m)).
+  auto robust_rms = [&](double loss, long count) {
+    if (count <= 0) return 0.0;
+    const double m = loss / count;
+    return m >= 1.0 ? cutoff_m : std::min(cutoff_m, scale_m * std::sqrt(m / (1.0 - m)));
+  };
   std::vector<Consistency> out(sets);
   for (int s = 0; s < sets; ++s) {
     Consistency& c = out[s];
-    std::vector<double> scan_sq(n, 0.0);
+    std::vector<double> scan_loss(n, 0.0);
     c.scan_samples.assign(n, 0);
     c.scan_rms_m.assign(n, 0.0);
+    c.pair_rms_m.assign(pairs.size(), -1.0);
     double total = 0;
-    for (std::size_t k = 0; k < sums.size(); ++k) {
-      if (sums[k].count == 0) continue;
-      const auto [a, b] = pairs[k / 2];
-      total += sums[k].sq[s];
-      c.samples += sums[k].count;
-      for (int v : {a, b}) {
-        scan_sq[v] += sums[k].sq[s];
-        c.scan_samples[v] += sums[k].count;
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      long met = 0;
+      double sq = 0;
+      for (std::size_t k : {2 * p, 2 * p + 1}) {
+        if (sums[k].count == 0) continue;
+        total += sums[k].loss[s];
+        c.samples += sums[k].count;
+        for (int v : {pairs[p].first, pairs[p].second}) {
+          scan_loss[v] += sums[k].loss[s];
+          c.scan_samples[v] += sums[k].count;
+        }
+        met += sums[k].met[s];
+        sq += sums[k].sq[s];
       }
+      if (met > 0) c.pair_rms_m[p] = std::sqrt(sq / met);
     }
-    c.rms_m = c.samples > 0 ? std::sqrt(total / c.samples) : 0.0;
-    for (int v = 0; v < n; ++v)
-      if (c.scan_samples[v] > 0) c.scan_rms_m[v] = std::sqrt(scan_sq[v] / c.scan_samples[v]);
+    c.rms_m = robust_rms(total, c.samples);
+    for (int v = 0; v < n; ++v) c.scan_rms_m[v] = robust_rms(scan_loss[v], c.scan_samples[v]);
   }
   return out;
 }

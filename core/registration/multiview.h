@@ -33,24 +33,27 @@ std::vector<std::pair<int, int>> OverlappingPairs(const std::vector<const ViewSu
                                                   const std::vector<Poses>& pose_sets, const std::vector<bool>& used,
                                                   double distance_m, double min_overlap);
 
-// Robust RMS of the point-to-plane residuals: each sample's residual is capped at the cutoff, and a
-// sample that finds no surface within the cutoff counts the cutoff. The samples are the same for
-// every pose set compared: those of each pair that meet the other surface within the cutoff at any
-// of them, so a pose that pulls scans apart cannot look better by losing its overlap. A sample
-// meets the other surface at the nearest of its 4 nearest samples there within the cutoff whose
-// normal is within 30° of its own and which lies within tangent_m along that sample's tangent plane
-// (beyond the other scan's border, or across a corner, it meets nothing); samples without a normal
-// take no part.
+// How consistent pose sets are, compared on the same samples. A sample of one scan meets the other
+// scan's surface at the nearest of its 4 nearest samples there within cutoff_m whose normal is
+// within 30° of its own and which lies within cutoff_m along that sample's tangent plane (beyond the
+// other scan's border, or across a corner, it meets nothing); samples without a normal take no
+// part. The samples compared are those of each pair that meet the other surface at any of the pose
+// sets; each costs the bounded (Geman-McClure) loss r^2 / (r^2 + scale^2) of its point-to-plane
+// residual r, or the loss's ceiling 1 where it meets nothing at that pose set — so a pose that
+// pulls scans apart cannot look better by losing its overlap, and a few samples seen at one pose
+// only (borders, occlusions) cannot outweigh the residuals of the rest. The mean loss m is reported
+// as a robust RMS, scale x sqrt(m / (1 - m)) (the RMS of residuals that would all give it).
 struct Consistency {
-  double rms_m = 0;
-  std::vector<double> scan_rms_m;  // each view's share: the residuals of the pairs it is in (0: none)
+  double rms_m = 0;                // over every pair
+  std::vector<double> scan_rms_m;  // each view's share: the pairs it is in (0: none)
   std::vector<long> scan_samples;
+  std::vector<double> pair_rms_m;  // per pair: the plain RMS of the residuals of the samples met at this pose set (-1: none)
   long samples = 0;
 };
 std::vector<Consistency> MeasureConsistency(const std::vector<const ViewSurface*>& views,
                                             const std::vector<Poses>& pose_sets,
                                             const std::vector<std::pair<int, int>>& pairs, double cutoff_m,
-                                            double tangent_m);
+                                            double scale_m);
 
 // The multi-view fine step: every view's pose at once, Gauss-Newton on the point-to-plane residuals
 // of every pair (both directions), correspondences found anew at each round, a Cauchy kernel, the

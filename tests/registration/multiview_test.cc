@@ -62,15 +62,15 @@ TEST(Consistency, AMisplacedScanIsTheLeastConsistentAndTheTruthIsNearTheNoise) {
   const std::vector<bool> all(4, true);
   const auto pairs = OverlappingPairs(v.pointers, {v.truth, moved}, all, 0.1, 0.05);
   ASSERT_EQ(pairs.size(), 6u);  // every station of one room sees the others
-  const std::vector<Consistency> c = MeasureConsistency(v.pointers, {v.truth, moved}, pairs, 0.1, 0.1);
+  const std::vector<Consistency> c = MeasureConsistency(v.pointers, {v.truth, moved}, pairs, 0.1, 0.025);
   ASSERT_EQ(c.size(), 2u);
   std::printf("room: robust RMS %.2f mm at the truth, %.2f mm with one scan 40 mm / 0.5 deg off (its share %.2f mm)\n",
               1e3 * c[0].rms_m, 1e3 * c[1].rms_m, 1e3 * c[1].scan_rms_m[2]);
   // Compared on the same samples, the misplaced pose is the less consistent (each pose set also
   // pays for the samples that meet only at the other: borders, occlusions).
-  EXPECT_GT(c[1].rms_m, 1.3 * c[0].rms_m);
+  EXPECT_GT(c[1].rms_m, 1.5 * c[0].rms_m);
   // Measured alone, the truth is near the noise: two noisy surfaces, sampled at 5 cm.
-  const Consistency truth = MeasureConsistency(v.pointers, {v.truth}, pairs, 0.1, 0.1)[0];
+  const Consistency truth = MeasureConsistency(v.pointers, {v.truth}, pairs, 0.1, 0.025)[0];
   std::printf("room at the truth alone: %.2f mm\n", 1e3 * truth.rms_m);
   EXPECT_LT(truth.rms_m, 1.5 * kNoise);
   for (int i : {0, 1, 3}) EXPECT_GT(c[1].scan_rms_m[2], c[1].scan_rms_m[i]);
@@ -100,7 +100,7 @@ TEST(MultiView, AllScansAtOnceReturnToTheTruthFromCentimetres) {
     EXPECT_LT(e.angle_rad, 0.05 / kDeg);
     EXPECT_GT(r->conditioning[i], 1e-3);  // a room constrains every direction
   }
-  const std::vector<Consistency> c = MeasureConsistency(v.pointers, {start, r->world}, pairs, 0.1, 0.1);
+  const std::vector<Consistency> c = MeasureConsistency(v.pointers, {start, r->world}, pairs, 0.1, 0.025);
   EXPECT_LT(c[1].rms_m, 0.5 * c[0].rms_m);
 }
 
