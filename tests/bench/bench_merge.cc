@@ -131,7 +131,7 @@ void TwoPlaneModel(Table& table, bool quick) {
 void Bunny(Table& table, bool quick) {
   const char* env = std::getenv("SCANREG_REALDATA");
   const std::filesystem::path root =
-      env ? std::filesystem::path(env) : std::filesystem::path(__FILE__).parent_path() / "../../../shared/realdata";
+      env ? std::filesystem::path(env) : std::filesystem::path(__FILE__).parent_path() / "../data/realdata";
   const std::filesystem::path dir = root / "stanford_bunny";
   if (!std::filesystem::exists(dir / "bun.conf")) {
     table.Add({"merge", "Stanford bunny", 0.0, "", "skipped: real data not found (set SCANREG_REALDATA)"});

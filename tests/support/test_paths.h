@@ -6,7 +6,7 @@
 
 namespace scanreg::test {
 
-// $SCANREG_REALDATA, defaulting to ../shared/realdata beside the source tree. Empty path when the
+// $SCANREG_REALDATA, defaulting to tests/data/realdata in the source tree. Empty path when the
 // directory does not exist (a user's machine); tests then GTEST_SKIP with a message.
 std::filesystem::path RealDataDir();
 
@@ -30,4 +30,4 @@ class TempDir {
 // Skips the current test when real data are missing.
 #define SCANREG_REQUIRE_REALDATA(dir)                                                              \
   const std::filesystem::path dir = ::scanreg::test::RealDataDir();                               \
-  if (dir.empty()) GTEST_SKIP() << "real data not found: set SCANREG_REALDATA to ../shared/realdata"
+  if (dir.empty()) GTEST_SKIP() << "real data not found: set SCANREG_REALDATA to a folder laid out as tests/data/realdata"
