@@ -56,13 +56,13 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   }
   bool any_reference = false;
   for (const auto& e : errors) any_reference |= e.available;
-  const bool consistency = r.consistency.measured;
+  const bool consistency = r.consistency.has_value();
   if (consistency) {
     std::printf("\nconsistency (no ground truth): robust RMS of the point-to-plane residuals over %d overlapping pairs "
                 "(capped at %.2f mm): %.3f mm at the start poses -> %.3f mm%s%s\n",
-                r.consistency.pairs, 1e3 * r.consistency.cutoff_m, 1e3 * r.consistency.start_rms_m,
-                1e3 * r.consistency.result_rms_m, r.consistency.multiview ? " (multi-view fine step)" : "",
-                r.consistency.refused ? "; less consistent than the start: REFUSED, the start poses are kept" : "");
+                r.consistency->pairs, 1e3 * r.consistency->cutoff_m, 1e3 * r.consistency->start_rms_m,
+                1e3 * r.consistency->result_rms_m, r.consistency->multiview ? " (multi-view fine step)" : "",
+                r.consistency->refused ? "; less consistent than the start: REFUSED, the start poses are kept" : "");
   }
   std::printf("\n%-8s %-13s", "scan", "status");
   if (consistency) std::printf(" %9s %9s %8s", "start mm", "resid mm", "cond");
@@ -144,7 +144,7 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
             {"parent", s.parent >= 0 ? json(scans[s.parent].name) : json(nullptr)},
             {"reason", s.reason},
             {"world_from_scan", std::vector<double>(m.begin(), m.end())}};
-    if (r.consistency.measured) {
+    if (r.consistency) {
       js["start_consistency_m"] = s.start_consistency_m;
       js["consistency_m"] = s.consistency_m;
       js["conditioning"] = s.conditioning;
@@ -174,13 +174,13 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
                 {"matching", r.seconds_matching},
                 {"pairs", r.seconds_pairs},
                 {"total", r.seconds_total}}}};
-  if (r.consistency.measured) {
-    out["consistency"] = {{"pairs", r.consistency.pairs},
-                          {"cutoff_m", r.consistency.cutoff_m},
-                          {"start_rms_m", r.consistency.start_rms_m},
-                          {"result_rms_m", r.consistency.result_rms_m},
-                          {"multiview", r.consistency.multiview},
-                          {"refused", r.consistency.refused}};
+  if (r.consistency) {
+    out["consistency"] = {{"pairs", r.consistency->pairs},
+                          {"cutoff_m", r.consistency->cutoff_m},
+                          {"start_rms_m", r.consistency->start_rms_m},
+                          {"result_rms_m", r.consistency->result_rms_m},
+                          {"multiview", r.consistency->multiview},
+                          {"refused", r.consistency->refused}};
   }
   return out;
 }

@@ -104,6 +104,13 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<pipeline:
                         .arg(link->overlap * 100, 0, 'f', 1)
                         .arg(link->consistent);
     }
+    if (s.consistency_m) {  // refinement from current poses: checked against every overlap
+      quality_tip += (quality_tip.isEmpty() ? "" : "\n") +
+                     tr("overlaps agree to %1 mm (at the start pose %2 mm)")
+                         .arg(*s.consistency_m * 1000, 0, 'f', 3)
+                         .arg(s.start_consistency_m ? QString::number(*s.start_consistency_m * 1000, 'f', 3) : "—");
+      if (s.conditioning) quality_tip += tr("; conditioning %1 (near 0: a direction of the pose is free)").arg(*s.conditioning, 0, 'f', 3);
+    }
     QTableWidgetItem* quality_item = Item(quality, Qt::AlignLeft | Qt::AlignVCenter);
     quality_item->setToolTip(quality_tip);
     setItem(i, 5, quality_item);

@@ -280,6 +280,14 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       scan.manual_pose = s.value("manual_pose", false);
       scan.cluster = s.value("cluster", "");
       scan.imported_pose = s.value("imported_pose", false);
+      for (const auto& [key, field] : {std::make_pair("start_consistency_m", &scan.start_consistency_m),
+                                       std::make_pair("consistency_m", &scan.consistency_m),
+                                       std::make_pair("conditioning", &scan.conditioning)}) {
+        if (!s.contains(key)) continue;
+        if (!s[key].is_number() || !(s[key].get<double>() >= 0))
+          return MakeError(ErrorCode::kParseError, label + " " + key + ": not a number of 0 or more");
+        *field = s[key].get<double>();
+      }
       if (s.contains("file_up")) {
         auto up = VecFrom(s["file_up"], label + " file_up");
         if (!up) return up.error();
@@ -319,6 +327,22 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
     }
     if (j.contains("confusion")) {
       if (Status s = ConfusionFromJson(j["confusion"], where, &project); !s) return s.error();
+    }
+    if (j.contains("consistency")) {
+      const json& c = j["consistency"];
+      ConsistencyRecord r;
+      try {
+        r.start_rms_m = c.at("start_rms_m").get<double>();
+        r.result_rms_m = c.at("result_rms_m").get<double>();
+        r.cutoff_m = c.at("cutoff_m").get<double>();
+        r.pairs = c.at("pairs").get<int>();
+        r.multiview = c.value("multiview", false);
+        r.refused = c.value("refused", false);
+      } catch (const json::exception& e) {
+        return MakeError(ErrorCode::kParseError, where + ": 'consistency' needs start_rms_m, result_rms_m, cutoff_m "
+                                                         "and pairs (" + e.what() + "); register again");
+      }
+      project.consistency = r;
     }
     if (j.contains("settings")) {
       for (auto it = j["settings"].begin(); it != j["settings"].end(); ++it)
@@ -367,6 +391,9 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
     if (!s.cluster.empty()) js["cluster"] = s.cluster;
     if (s.imported_pose) js["imported_pose"] = true;
     if (s.file_up) js["file_up"] = Vec(*s.file_up);
+    if (s.start_consistency_m) js["start_consistency_m"] = *s.start_consistency_m;
+    if (s.consistency_m) js["consistency_m"] = *s.consistency_m;
+    if (s.conditioning) js["conditioning"] = *s.conditioning;
     scans.push_back(std::move(js));
   }
   json links = json::array();
@@ -378,6 +405,11 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
          {"settings", project.settings}};
   j["root"] = project.root ? json(*project.root) : json(nullptr);
   GeorefToJson(project, &j);
+  if (const ConsistencyRecord* c = project.consistency ? &*project.consistency : nullptr) {
+    j["consistency"] = json{{"start_rms_m", c->start_rms_m}, {"result_rms_m", c->result_rms_m},
+                            {"cutoff_m", c->cutoff_m},       {"pairs", c->pairs},
+                            {"multiview", c->multiview},     {"refused", c->refused}};
+  }
   if (const Eigen::MatrixXi* confusion = project.CurrentConfusion()) {
     json rows = json::array();
     for (int i = 0; i < confusion->rows(); ++i) {

@@ -61,6 +61,17 @@ Expected<Eigen::Isometry3d> PoseFromJson(const nlohmann::json& j, const std::str
 nlohmann::json LinkToJson(const LinkRecord& link);
 Expected<LinkRecord> LinkFromJson(const nlohmann::json& j, const std::string& where);
 
+// How consistent the poses of the last refinement from current poses are, without ground truth
+// (pipeline/verify_poses.h): the robust RMS of the point-to-plane residuals over every overlapping
+// pair, at the start poses and as returned.
+struct ConsistencyRecord {
+  double start_rms_m = 0, result_rms_m = 0;
+  double cutoff_m = 0;  // a sample meets the other surface within this
+  int pairs = 0;
+  bool multiview = false;  // the multi-view fine step's poses were taken
+  bool refused = false;    // the result was less consistent than the start: the start poses were kept
+};
+
 struct ProjectScan {
   std::string name;            // unique within the project
   std::filesystem::path path;  // absolute while in memory; relative to the project on disk
@@ -89,6 +100,10 @@ struct ProjectScan {
   // the cluster's own frame (the cluster root's pose), so one link to a registered scan places the
   // whole cluster (pipeline::ApplyPairResult). Cleared when the scan is registered.
   std::string cluster;
+  // From the last refinement from current poses (ConsistencyRecord): the median RMS of the residuals
+  // of the scan's overlapping pairs at its start pose and at its result, and how well its overlaps
+  // constrain its pose (1: every direction alike; near 0: one is free).
+  std::optional<double> start_consistency_m, consistency_m, conditioning;
 };
 
 // Where a scan's pose comes from, for every front end and the report (one wording).
@@ -107,6 +122,7 @@ struct Project {
   // Confusion matrix C(i, j) of the last registration (W §2 step 3) and the names of the scans of
   // its rows and columns; empty when the project has not been registered. Optional in the file.
   Eigen::MatrixXi confusion;
+  std::optional<ConsistencyRecord> consistency;  // of the last registration, when it measured one
   std::vector<std::string> confusion_scans;
   // A digest of the file's bytes as last read or saved (0: none): SaveProject onto the same file
   // refuses when the file no longer has them — another run or an editor changed it meanwhile.

@@ -389,6 +389,15 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
     ps.coarse_world_from_scan.reset();
     if (ps.registered && result.scans[i].has_coarse) ps.coarse_world_from_scan = result.scans[i].coarse_world_from_scan;
   }
+  for (std::size_t i = 0; i < project.scans.size() && i < result.scans.size(); ++i) {
+    io::ProjectScan& ps = project.scans[i];
+    const ScanRegistration& s = result.scans[i];
+    auto measured = [](double v) { return v >= 0 ? std::optional<double>(v) : std::nullopt; };
+    ps.start_consistency_m = measured(s.start_consistency_m);
+    ps.consistency_m = measured(s.consistency_m);
+    ps.conditioning = measured(s.conditioning);
+  }
+  project.consistency = result.consistency;
   project.confusion = result.confusion;
   project.confusion_scans.clear();
   for (const io::ProjectScan& s : project.scans) project.confusion_scans.push_back(s.name);

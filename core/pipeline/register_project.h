@@ -37,16 +37,6 @@ struct ScanRegistration {
   double start_consistency_m = -1, consistency_m = -1, conditioning = -1;
 };
 
-// How consistent the poses are without ground truth (verify_poses.h), at the start and as returned.
-struct ConsistencyCheck {
-  bool measured = false;
-  double start_rms_m = 0, result_rms_m = 0;  // robust RMS of the point-to-plane residuals of every overlapping pair
-  double cutoff_m = 0;                       // residuals capped here
-  int pairs = 0;
-  bool multiview = false;  // the multi-view fine step's poses were taken
-  bool refused = false;    // the result was less consistent than the start: the start poses were kept
-};
-
 struct ProjectRegistration {
   Eigen::MatrixXi confusion;  // C(i, j), W §2 step 3
   int root = -1;
@@ -60,7 +50,7 @@ struct ProjectRegistration {
     bool down_weighted = false;
   };
   std::vector<GlobalLink> global_links;
-  ConsistencyCheck consistency;
+  std::optional<io::ConsistencyRecord> consistency;  // refinement from current poses (verify_poses.h)
   // Georeferencing (issue 15), run when the project has control points: whether it placed the
   // project in the control frame, and why not. The residuals are in io::Project::georef.
   bool georeferenced = false;

@@ -80,8 +80,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   const auto pairs = OverlappingPairs(views, sets, all, options.evidence_m, options.min_overlap);
   progress.Report(0.6, "measuring the consistency of " + std::to_string(pairs.size()) + " overlapping pairs");
   std::vector<Consistency> measured = MeasureConsistency(views, sets, pairs, options.cutoff_m, scale);
-  ConsistencyCheck& check = result->consistency;
-  check.measured = true;
+  io::ConsistencyRecord& check = result->consistency.emplace();
   check.cutoff_m = options.cutoff_m;
   check.pairs = static_cast<int>(pairs.size());
   check.start_rms_m = measured[0].rms_m;

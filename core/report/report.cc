@@ -176,8 +176,19 @@ std::string PosesSection(const io::Project& p) {
       "<h2 id=\"poses\">Scan poses</h2>\n<p>world_from_scan: position of the scanner origin (m); "
       "heading, pitch, roll with R = Rz(heading) Ry(pitch) Rx(roll); tilt = angle between the "
       "scanner's and the world's z axes (degrees).</p>\n";
+  if (p.consistency) {  // refinement from current poses: checked without ground truth
+    const io::ConsistencyRecord& c = *p.consistency;
+    html += "<p id=\"consistency\">Consistency without ground truth: the robust RMS of the point-to-plane residuals "
+            "over the " + std::to_string(c.pairs) + " overlapping pairs (a sample meets the other surface within " +
+            Fixed(1e3 * c.cutoff_m, 2) + " mm) was <b>" + Fixed(1e3 * c.start_rms_m, 3) + " mm</b> at the start poses and <b>" +
+            Fixed(1e3 * c.result_rms_m, 3) + " mm</b> after" + (c.multiview ? " the multi-view fine step" : "") +
+            (c.refused ? "; the result was less consistent than the start and was refused: the start poses are kept" : "") +
+            ". Each scan's overlap residual below is the median RMS of its overlapping pairs; a scan is registered only "
+            "when it agrees with the others, overlaps a registered scan and its overlaps constrain every direction of "
+            "its pose (conditioning: 1 every direction alike, near 0 one is free).</p>\n";
+  }
   HtmlTable t("poses-table", {"scan", "status", "x (m)", "y (m)", "z (m)", "heading (°)", "pitch (°)", "roll (°)",
-                              "tilt (°)", "world_from_scan"});
+                              "tilt (°)", "world_from_scan", "overlap residual (mm): start → result", "conditioning"});
   const std::vector<bool> on_hand = io::RestsOnHandPlacement(p);
   for (std::size_t i = 0; i < p.scans.size(); ++i) {
     const io::ProjectScan& s = p.scans[i];
@@ -192,7 +203,10 @@ std::string PosesSection(const io::Project& p) {
     if (s.registered && !s.manual_pose && s.imported_pose) status = "imported from a file (no link evidence)";
     t.AddRow({Escape(s.name), Escape(status), Fixed(x.x(), 4), Fixed(x.y(), 4), Fixed(x.z(), 4),
               Fixed(a.heading * kDeg, 4), Fixed(a.pitch * kDeg, 4), Fixed(a.roll * kDeg, 4),
-              Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan)},
+              Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan),
+              (s.start_consistency_m ? Fixed(1e3 * *s.start_consistency_m, 3) : std::string("-")) + " → " +
+                  (s.consistency_m ? Fixed(1e3 * *s.consistency_m, 3) : std::string("-")),
+              s.conditioning ? Fixed(*s.conditioning, 3) : std::string("-")},
              !s.registered                      ? "failed"
              : s.manual_pose || s.imported_pose || on_hand[i] ? "weak"
                                                 : "ok");
