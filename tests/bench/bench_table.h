@@ -57,6 +57,7 @@ void RunGeometricBench(Table& table, bool quick);
 void RunHardBench(Table& table, bool quick);
 void RunGeorefBench(Table& table, bool quick);
 void RunCityBench(Table& table, bool quick);
+void RunTrustBench(Table& table, bool quick);  // bench_trust.cc
 void RunBigScansBench(Table& table, bool quick);  // bench_city.cc
 
 }  // namespace scanreg::bench
