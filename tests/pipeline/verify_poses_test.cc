@@ -22,21 +22,7 @@ namespace {
 constexpr double kDeg = 180.0 / M_PI;
 constexpr double kNoise = 0.003;
 
-Eigen::Isometry3d Station(double x, double y, double heading_deg) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.translate(Eigen::Vector3d(x, y, 1.5));
-  t.rotate(Eigen::AngleAxisd(heading_deg / kDeg, Eigen::Vector3d::UnitZ()));
-  return t;
-}
 
-Eigen::Isometry3d Moved(const Eigen::Isometry3d& pose, double mm, double deg, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
-  d.linear() = Eigen::AngleAxisd(deg / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
-  d.translation() = 1e-3 * mm * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-  return pose * d;
-}
 
 // Four stations in one room, their start poses the truth; `result` as the driver would return it
 // (every scan registered to the root s0), with poses the caller then changes.
@@ -51,7 +37,7 @@ struct Room {
 
 Room MakeRoom() {
   Room r;
-  r.truth = {Station(-3, -1, 0), Station(0, 1, 40), Station(3, -1.5, -70), Station(1, 2.5, 150)};
+  r.truth = {testing::RoomStation(-3, -1, 0), testing::RoomStation(0, 1, 40), testing::RoomStation(3, -1.5, -70), testing::RoomStation(1, 2.5, 150)};
   r.result.root = 0;
   for (std::size_t i = 0; i < r.truth.size(); ++i) {
     Scan s = testing::CastRoomScan(r.truth[i], 120, 360, testing::DefaultRoom(), testing::DefaultBlocks(), kNoise,
@@ -86,7 +72,7 @@ Room MakeRoom() {
 TEST(VerifyPoses, AScanALinkMovedAwayFromItsOverlapsGoesBackToItsStartPose) {
   Room room = MakeRoom();
   room.options.multiview = false;  // the check alone
-  room.result.scans[2].world_from_scan = Moved(room.truth[2], 50, 1.0, 7);
+  room.result.scans[2].world_from_scan = testing::MovedPose(room.truth[2], 50, 1.0, 7);
   NullProgress progress;
   CancelToken cancel;
   ASSERT_TRUE(VerifyAgainstStart(room.scans, room.samples, room.choices, room.options, progress, cancel, &room.result).ok());
@@ -104,8 +90,8 @@ TEST(VerifyPoses, AScanALinkMovedAwayFromItsOverlapsGoesBackToItsStartPose) {
 
 TEST(VerifyPoses, TheMultiViewStepBringsAStrayScanBackWithoutUndoingItsLink) {
   Room room = MakeRoom();
-  for (int i = 1; i < 4; ++i) room.scans[i].world_from_scan = Moved(room.truth[i], 30, 0.5, 20 + i);  // starts off
-  for (int i = 1; i < 4; ++i) room.result.scans[i].world_from_scan = Moved(room.truth[i], 15, 0.2, 30 + i);  // pairwise
+  for (int i = 1; i < 4; ++i) room.scans[i].world_from_scan = testing::MovedPose(room.truth[i], 30, 0.5, 20 + i);  // starts off
+  for (int i = 1; i < 4; ++i) room.result.scans[i].world_from_scan = testing::MovedPose(room.truth[i], 15, 0.2, 30 + i);  // pairwise
   NullProgress progress;
   CancelToken cancel;
   ASSERT_TRUE(VerifyAgainstStart(room.scans, room.samples, room.choices, room.options, progress, cancel, &room.result).ok());
@@ -126,7 +112,7 @@ TEST(VerifyPoses, AScanWhoseOverlapsDisagreeIsNotCalledRegistered) {
   Room room = MakeRoom();
   room.options.multiview = false;
   // Its start pose and its result agree (no link moved it), and both are 40 mm off.
-  room.scans[3].world_from_scan = room.result.scans[3].world_from_scan = Moved(room.truth[3], 40, 0.5, 5);
+  room.scans[3].world_from_scan = room.result.scans[3].world_from_scan = testing::MovedPose(room.truth[3], 40, 0.5, 5);
   NullProgress progress;
   CancelToken cancel;
   ASSERT_TRUE(VerifyAgainstStart(room.scans, room.samples, room.choices, room.options, progress, cancel, &room.result).ok());
@@ -157,7 +143,7 @@ TEST(VerifyPoses, BunnyFromFiveDegreesNeverWorseAndNeverWrongWhenRegistered) {
   for (unsigned seed : {1u, 3u}) {
     std::vector<Scan> scans = reference;
     for (std::size_t i = 0; i < scans.size(); ++i)
-      scans[i].world_from_scan = Moved(*scans[i].reference_world_from_scan, 5, 5, seed * 100 + static_cast<unsigned>(i));
+      scans[i].world_from_scan = testing::MovedPose(*scans[i].reference_world_from_scan, 5, 5, seed * 100 + static_cast<unsigned>(i));
     for (FineMethod fine : {FineMethod::kDense, FineMethod::kEm}) {
       RegisterOptions o;
       o.from_current_poses = true;  // what `register` does on imported poses

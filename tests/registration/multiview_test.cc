@@ -17,12 +17,6 @@ namespace {
 constexpr double kDeg = 180.0 / M_PI;
 constexpr double kNoise = 0.003;  // range noise of the simulated scanner, metres
 
-Eigen::Isometry3d Station(double x, double y, double heading_deg) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.translate(Eigen::Vector3d(x, y, 1.5));
-  t.rotate(Eigen::AngleAxisd(heading_deg / kDeg, Eigen::Vector3d::UnitZ()));
-  return t;
-}
 
 struct Views {
   std::vector<ViewSurface> surfaces;
@@ -32,7 +26,7 @@ struct Views {
 
 Views RoomViews() {
   Views v;
-  v.truth = {Station(-3, -1, 0), Station(0, 1, 40), Station(3, -1.5, -70), Station(1, 2.5, 150)};
+  v.truth = {testing::RoomStation(-3, -1, 0), testing::RoomStation(0, 1, 40), testing::RoomStation(3, -1.5, -70), testing::RoomStation(1, 2.5, 150)};
   v.surfaces.resize(v.truth.size());
   for (std::size_t i = 0; i < v.truth.size(); ++i) {
     const Scan s = testing::CastRoomScan(v.truth[i], 120, 360, testing::DefaultRoom(), testing::DefaultBlocks(), kNoise,
@@ -46,19 +40,11 @@ Views RoomViews() {
   return v;
 }
 
-Eigen::Isometry3d Moved(const Eigen::Isometry3d& pose, double mm, double deg, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
-  d.linear() = Eigen::AngleAxisd(deg / kDeg, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
-  d.translation() = 1e-3 * mm * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-  return pose * d;
-}
 
 TEST(Consistency, AMisplacedScanIsTheLeastConsistentAndTheTruthIsNearTheNoise) {
   const Views v = RoomViews();
   Poses moved = v.truth;
-  moved[2] = Moved(v.truth[2], 40, 0.5, 3);
+  moved[2] = testing::MovedPose(v.truth[2], 40, 0.5, 3);
   const std::vector<bool> all(4, true);
   const auto pairs = OverlappingPairs(v.pointers, {v.truth, moved}, all, 0.1, 0.05);
   ASSERT_EQ(pairs.size(), 6u);  // every station of one room sees the others
@@ -80,7 +66,7 @@ TEST(Consistency, AMisplacedScanIsTheLeastConsistentAndTheTruthIsNearTheNoise) {
 TEST(MultiView, AllScansAtOnceReturnToTheTruthFromCentimetres) {
   const Views v = RoomViews();
   Poses start = v.truth;
-  for (int i = 1; i < 4; ++i) start[i] = Moved(v.truth[i], 30, 1.0, 10 + i);
+  for (int i = 1; i < 4; ++i) start[i] = testing::MovedPose(v.truth[i], 30, 1.0, 10 + i);
   const std::vector<bool> all(4, true);
   const auto pairs = OverlappingPairs(v.pointers, {start}, all, 0.1, 0.05);
   std::vector<bool> fixed = {true, false, false, false};

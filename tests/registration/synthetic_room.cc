@@ -72,4 +72,20 @@ Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, 
   return scan;
 }
 
+Eigen::Isometry3d RoomStation(double x, double y, double heading_deg) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translate(Eigen::Vector3d(x, y, 1.5));
+  t.rotate(Eigen::AngleAxisd(heading_deg * kPi / 180, Eigen::Vector3d::UnitZ()));
+  return t;
+}
+
+Eigen::Isometry3d MovedPose(const Eigen::Isometry3d& pose, double mm, double deg, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::Isometry3d d = Eigen::Isometry3d::Identity();
+  d.linear() = Eigen::AngleAxisd(deg * kPi / 180, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()).toRotationMatrix();
+  d.translation() = 1e-3 * mm * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+  return pose * d;
+}
+
 }  // namespace scanreg::testing

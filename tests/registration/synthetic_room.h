@@ -23,4 +23,10 @@ std::vector<AxisBox> DefaultBlocks();
 Scan CastRoomScan(const Eigen::Isometry3d& world_from_scan, int rows, int cols, const AxisBox& room,
                   const std::vector<AxisBox>& blocks, double range_sigma_m = 0.0, unsigned seed = 1);
 
+// A station in the room: 1.5 m above the floor at (x, y), turned heading_deg about the vertical.
+Eigen::Isometry3d RoomStation(double x, double y, double heading_deg);
+
+// pose moved by deg about a random axis and mm in a random direction (in its own frame; seeded).
+Eigen::Isometry3d MovedPose(const Eigen::Isometry3d& pose, double mm, double deg, unsigned seed);
+
 }  // namespace scanreg::testing
