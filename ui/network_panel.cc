@@ -237,7 +237,13 @@ QString NetworkPanel::ScanToolTip(const QString& name) const {
   if (!s.registered && !s.cluster.empty())
     tip += tr("\nin the cluster of %1: registered to its scans, not to the root; one link places the cluster")
                .arg(QString::fromStdString(s.cluster));
-  if (!s.registered && !s.unregistered_reason.empty()) tip += "\n" + QString::fromStdString(s.unregistered_reason);
+  // Why it is not registered — also when it kept its imported pose because the registration could not verify it.
+  if ((!s.registered || s.imported_pose) && !s.unregistered_reason.empty())
+    tip += "\n" + QString::fromStdString(s.unregistered_reason);
+  if (s.consistency_m)
+    tip += tr("\noverlaps agree to %1 mm (at the start pose %2 mm)")
+               .arg(*s.consistency_m * 1000, 0, 'f', 3)
+               .arg(s.start_consistency_m ? QString::number(*s.start_consistency_m * 1000, 'f', 3) : "—");
   return tip;
 }
 

@@ -114,8 +114,10 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<pipeline:
     QTableWidgetItem* quality_item = Item(quality, Qt::AlignLeft | Qt::AlignVCenter);
     quality_item->setToolTip(quality_tip);
     setItem(i, 5, quality_item);
-    QString reason = QString::fromStdString(s.registered ? (link && link == tree ? link->reason : std::string())
-                                                         : s.unregistered_reason);
+    // A scan that kept its imported pose says why the registration could not place it.
+    QString reason = QString::fromStdString(s.registered && !(s.imported_pose && !s.unregistered_reason.empty())
+                                                ? (link && link == tree ? link->reason : std::string())
+                                                : s.unregistered_reason);
     QTableWidgetItem* reason_item = Item(reason.isEmpty() ? "—" : reason, Qt::AlignLeft | Qt::AlignVCenter);
     reason_item->setToolTip(reason);  // the full text; the cell may be narrower
     setItem(i, 6, reason_item);

@@ -200,7 +200,10 @@ std::string PosesSection(const io::Project& p) {
     if (s.registered && s.manual_pose) status = "placed by hand (no link evidence)";
     if (s.registered && !s.manual_pose && on_hand[i])
       status = "registered through a scan placed by hand: its pose carries that placement's error";
-    if (s.registered && !s.manual_pose && s.imported_pose) status = "imported from a file (no link evidence)";
+    if (s.registered && !s.manual_pose && s.imported_pose) {
+      status = "imported from a file (no link evidence)";
+      if (!s.unregistered_reason.empty()) status += "; the registration could not verify it: " + s.unregistered_reason;
+    }
     t.AddRow({Escape(s.name), Escape(status), Fixed(x.x(), 4), Fixed(x.y(), 4), Fixed(x.z(), 4),
               Fixed(a.heading * kDeg, 4), Fixed(a.pitch * kDeg, 4), Fixed(a.roll * kDeg, 4),
               Fixed(TiltAngle(s.world_from_scan.linear()) * kDeg, 4), Matrix(s.world_from_scan),
