@@ -83,7 +83,6 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   io::ConsistencyRecord& check = result->consistency.emplace();
   check.cutoff_m = options.cutoff_m;
   check.pairs = static_cast<int>(pairs.size());
-  check.start_rms_m = measured[0].rms_m;
   Consistency current = measured[1];
   if (!multiview.empty()) {
     if (measured[2].rms_m <= measured[1].rms_m) {
@@ -102,8 +101,21 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   for (int i = 0; i < n; ++i)
     if (registered[i]) taken[i] = result->scans[i].world_from_scan;
 
-  // Each scan no worse than at its start pose, the worst first.
-  const Consistency& at_start = measured[0];
+  // Each scan no worse than at its start pose, the worst first. Every comparison is made on the
+  // samples of all the pose sets above and the poses taken now, so the start's figures stay comparable.
+  auto held_by_user = [&](int i) {  // the user's link is never undone
+    for (const auto& [edge, link] : choices.kept)
+      if (edge.second == i) return true;
+    return false;
+  };
+  auto measure_taken = [&](Consistency* at_start, Consistency* now) {
+    std::vector<Poses> with_taken = sets;
+    with_taken.push_back(taken);
+    std::vector<Consistency> c = MeasureConsistency(views, with_taken, pairs, options.cutoff_m, scale);
+    *at_start = std::move(c.front());
+    *now = std::move(c.back());
+  };
+  Consistency at_start = measured[0];
   auto worse = [&](const Consistency& c, int i) {
     return c.scan_samples[i] > 0 && c.scan_rms_m[i] > 1.05 * at_start.scan_rms_m[i] + 0.25 * options.noise_m;
   };
@@ -111,10 +123,9 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     int worst = -1;
     double ratio = 1.0;
     for (int i = 0; i < n; ++i) {
-      if (!registered[i] || i == result->root || taken[i].isApprox(start[i], 1e-12) || !worse(current, i)) continue;
-      bool kept = false;  // the user's link is never undone
-      for (const auto& [edge, link] : choices.kept) kept |= edge.second == i;
-      if (kept) continue;
+      if (!registered[i] || i == result->root || taken[i].isApprox(start[i], 1e-12) || !worse(current, i) ||
+          held_by_user(i))
+        continue;
       const double r = current.scan_rms_m[i] / std::max(at_start.scan_rms_m[i], 1e-12);
       if (r > ratio) ratio = r, worst = i;
     }
@@ -125,9 +136,10 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     FailPlacingLink(scans, worst, why, result);
     taken[worst] = start[worst];
     result->scans[worst].world_from_scan = start[worst];
-    current = MeasureConsistency(views, {taken}, pairs, options.cutoff_m, scale)[0];
+    measure_taken(&at_start, &current);
   }
   // The whole no worse than the start.
+  check.start_rms_m = at_start.rms_m;
   if (current.rms_m > check.start_rms_m) {
     LogWarning("the refinement left the project less consistent than its start poses (robust RMS " +
                Mm(check.start_rms_m) + " -> " + Mm(current.rms_m) + " over " + std::to_string(pairs.size()) +
@@ -150,15 +162,10 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
   for (int i = 0; i < n; ++i) fixed[i] = i == result->root || !registered[i];
   std::vector<double> conditioning(n, -1);
   if (Expected<MultiViewResult> c = AlignMultiView(views, taken, final_pairs, fixed, probe, cancel)) conditioning = c->conditioning;
-  // The residual a verified scan may show: near the others' (real scanners leave calibration and
-  // resampling errors well above the range noise: the bunny's pairs ~5 x) and near the noise, but
-  // always well inside the cutoff, where a misplaced scan's residuals pile up.
-  // Measured over the samples that meet the other surface at these poses only (the comparison with
-  // the start also counts the samples that met at the start poses, which may be spurious there).
   // Each scan's agreement: the median over its pairs of the RMS of the residuals that meet at these
-  // poses (a misplaced neighbour spoils one of its pairs, not its median).
-  auto agreement = [&](const Poses& poses, const std::vector<bool>& used) {
-    const auto pairs_here = OverlappingPairs(views, {poses}, used, options.evidence_m, options.min_overlap);
+  // poses only (a misplaced neighbour spoils one of its pairs, not its median; samples that met only
+  // at other poses, maybe spuriously, do not count here).
+  auto agreement = [&](const Poses& poses, const std::vector<std::pair<int, int>>& pairs_here) {
     const Consistency c = MeasureConsistency(views, {poses}, pairs_here, options.cutoff_m, scale)[0];
     std::vector<double> out(n, -1.0);
     for (int i = 0; i < n; ++i) {
@@ -171,8 +178,12 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     }
     return out;
   };
-  const std::vector<double> own = agreement(taken, registered);
-  const std::vector<double> own_start = agreement(start, all);
+  const std::vector<double> own = agreement(taken, final_pairs);
+  const std::vector<double> own_start =
+      agreement(start, OverlappingPairs(views, {start}, all, options.evidence_m, options.min_overlap));
+  // The residual a verified scan may show: near the others' (real scanners leave calibration and
+  // resampling errors well above the range noise: the bunny's pairs ~5 x) and near the noise, but
+  // always well inside the cutoff, where a misplaced scan's residuals pile up.
   std::vector<double> shares;
   for (int i = 0; i < n; ++i)
     if (result->scans[i].registered && own[i] >= 0) shares.push_back(own[i]);
@@ -186,9 +197,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     s.consistency_m = own[i];
     s.conditioning = fixed[i] ? -1 : conditioning[i];
     if (!s.registered || i == result->root) continue;
-    bool kept = false;
-    for (const auto& [edge, link] : choices.kept) kept |= edge.second == i;
-    if (kept) continue;  // the user's decision
+    if (held_by_user(i)) continue;  // the user's decision
     int partners = 0;
     for (const auto& [a, b] : final_pairs) partners += a == i || b == i;
     std::string why;
