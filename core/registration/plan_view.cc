@@ -96,8 +96,16 @@ PlanView MakePlanView(const GeometricFeatures& features, const PlanOptions& opti
 std::vector<PlanHypothesis> PlanHypotheses(const PlanView& parent, const PlanView& child, const PlanOptions& options) {
   std::vector<PlanHypothesis> out;
   if (!parent.usable || !child.usable || !(parent.cell_m > 0.0)) return out;
-  const double cell = parent.cell_m;
-  const int half = static_cast<int>(std::ceil(options.radius_m / cell));
+  // The map reaches the farthest wall of either scan (not beyond the radius), and has at most
+  // kMaxMapCells cells across (streets: never reached): an office's 7 cm cells over a 60 m radius would make every pair's
+  // correlation a 3456 x 3456 FFT (issue 38), where the walls lie within 20 m.
+  double reach = 0.0;
+  for (const PlanView* v : {&parent, &child})
+    for (const Eigen::Vector2d& p : v->wall_xy) reach = std::max(reach, p.norm());
+  reach = std::min(reach, options.radius_m) + parent.cell_m;
+  constexpr int kMaxMapCells = 2048;
+  const double cell = std::max(parent.cell_m, 4.0 * reach / kMaxMapCells);
+  const int half = static_cast<int>(std::ceil(reach / cell));
   const int size = cv::getOptimalDFTSize(4 * half);
   const cv::Mat pmap = WallMap(parent.wall_xy, cell, half, size);
   cv::Mat pspec;
