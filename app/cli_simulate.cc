@@ -19,8 +19,11 @@ const std::vector<OptionSpec> kSimulateOptions = {
     {"noise-growth", true, false, "M/M      range noise sigma added per metre of range (default 0; 1e-4 = +1 cm at 100 m)"},
     {"traffic", true, false, "N        N moving vehicles and 2N pedestrians around each station, new in every scan (default 0)"},
     {"seed", true, false, "S        random seed (default 1)"},
-    {"scene", true, false, "street|windows|city   scene kind (default street); city: a grid of blocks whose streets "
-                           "close loops, grown to hold the stations (no targets, traffic or far station)"},
+    {"scene", true, false, "street|windows|city|office|office-identical   scene kind (default street); city: a grid of "
+                           "blocks whose streets close loops, grown to hold the stations; office: a corridor with "
+                           "same-size rooms behind regular doors, half the stations in the corridor SPACING apart, "
+                           "each other one in a room in front of its door; office-identical: every room alike, the "
+                           "floor symmetric (city and office: no targets, traffic or far station)"},
     {"far-station", false, false, "       add one station far away (no overlap)"},
     {"no-reflectance", false, false, "       write a constant reflectance of 0.5 (as some exporters do): geometry only"},
     {"sphere-targets", true, false, "N        N sphere targets (145 mm) on tripods along the street, and DIR/control.csv "
@@ -64,8 +67,9 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   auto seed = args.GetInt("seed", 1, 0, 1 << 30);
   if (!seed) return seed.error();
   const std::string scene = args.Get("scene").value_or("street");
-  if (scene != "street" && scene != "windows" && scene != "city") {
-    return MakeError(ErrorCode::kInvalidArgument, "--scene must be 'street', 'windows' or 'city', not '" + scene + "'");
+  if (scene != "street" && scene != "windows" && scene != "city" && scene != "office" && scene != "office-identical") {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "--scene must be 'street', 'windows', 'city', 'office' or 'office-identical', not '" + scene + "'");
   }
   options.stations = *stations;
   options.spacing_m = *spacing;
@@ -79,8 +83,10 @@ Expected<SimulatedProjectOptions> ReadSimulationOptions(const Args& args, std::p
   options.seed = static_cast<std::uint64_t>(*seed);
   options.scanner.seed = options.seed;
   options.scene.seed = options.seed;
-  options.scene.kind = scene == "windows" ? SceneOptions::Kind::kRepeatedWindows
-                       : scene == "city"  ? SceneOptions::Kind::kCity
+  options.scene.kind = scene == "windows"            ? SceneOptions::Kind::kRepeatedWindows
+                       : scene == "city"             ? SceneOptions::Kind::kCity
+                       : scene == "office"           ? SceneOptions::Kind::kOffice
+                       : scene == "office-identical" ? SceneOptions::Kind::kOfficeIdentical
                                           : SceneOptions::Kind::kStreet;
   options.add_far_station = args.Has("far-station");
   options.scanner.reflectance = !args.Has("no-reflectance");

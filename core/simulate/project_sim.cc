@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "core/simulate/random.h"
+#include "core/simulate/scene_builder.h"
 
 namespace scanreg {
 namespace {
@@ -40,6 +41,39 @@ std::vector<Eigen::Vector3d> CityStations(const SimulatedProjectOptions& o, cons
   return out;
 }
 
+bool IsOfficeProject(const SimulatedProjectOptions& o) { return IsOffice(o.scene.kind); }
+
+// Office floors: the corridor holds half the stations (rounded up) spacing_m apart with 3 m to spare
+// at each end, at least 36 m.
+double OfficeLength(const SimulatedProjectOptions& o) {
+  const int corridor = (o.stations + 1) / 2;
+  return std::max(36.0, (corridor - 1) * o.spacing_m + 6.0);
+}
+
+// Office floors: stations in walking order: a corridor station, then one in the room whose door is
+// nearest to it (alternating sides), 1.2-1.7 m inside, and so on; the corridor stations spacing_m
+// apart along its axis. Furniture stands clear of the room stations (scene_office.cc).
+std::vector<Eigen::Vector3d> OfficeStations(const SimulatedProjectOptions& o, sim::Rng& rng) {
+  const int corridor = (o.stations + 1) / 2;
+  const double room = 4.0, half_l = 0.5 * room * std::max(2, static_cast<int>(std::round(OfficeLength(o) / room)));
+  const bool identical = o.scene.kind == SceneOptions::Kind::kOfficeIdentical;
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i < corridor; ++i) {
+    const double x = (i - 0.5 * (corridor - 1)) * o.spacing_m + rng.Uniform(-0.1, 0.1) * std::min(o.spacing_m, 4.0);
+    out.emplace_back(x, rng.Uniform(-0.3, 0.3), rng.Uniform(1.4, 1.7));
+    if (static_cast<int>(out.size()) == o.stations) break;
+    const double side = i % 2 == 0 ? 1.0 : -1.0;
+    // The door nearest to x on that side (scene_office.cc: 0.6 m from the room's -x wall on +y,
+    // mirrored on -y; centred in kOfficeIdentical), and a station in front of it inside the room.
+    const double door_from = identical ? 0.5 * (room - 0.9) : 0.6;
+    const double from = side > 0 ? door_from : room - door_from - 0.9;
+    const int k = std::clamp(static_cast<int>(std::floor((x + half_l) / room)), 0, static_cast<int>(2 * half_l / room) - 1);
+    const double door = -half_l + k * room + from + 0.45;
+    out.emplace_back(door + rng.Uniform(-0.4, 0.4), side * (1.12 + rng.Uniform(1.2, 1.7)), rng.Uniform(1.4, 1.7));
+  }
+  return out;
+}
+
 // kCity: the smallest grid of blocks (widening alternately) whose streets hold every station, and
 // never smaller than the options ask; nullopt when even 10 x 10 blocks do not.
 std::optional<SceneOptions> CityFor(const SimulatedProjectOptions& o) {
@@ -58,7 +92,7 @@ std::optional<SceneOptions> CityFor(const SimulatedProjectOptions& o) {
 // a city grows to hold them.
 SceneOptions ProjectScene(const SimulatedProjectOptions& o) {
   SceneOptions s = IsCity(o) ? CityFor(o).value_or(o.scene) : o.scene;
-  s.street_length_m = std::max(s.street_length_m, SpanOf(o) + 60.0);
+  s.street_length_m = IsOfficeProject(o) ? OfficeLength(o) : std::max(s.street_length_m, SpanOf(o) + 60.0);
   s.far_site = s.far_site || o.add_far_station;
   for (const SimulatedTarget& t : SimulatedTargets(o)) {
     if (t.kind == "sphere") s.sphere_targets.push_back(t.world);
@@ -90,7 +124,16 @@ Status SimulatedProjectOptions::Validate() const {
   if (!(max_tilt_deg >= 0.0 && max_tilt_deg <= 20.0))
     return MakeError(ErrorCode::kInvalidArgument,
                      "project: max tilt " + std::to_string(max_tilt_deg) + "° is outside [0, 20]°");
-  if (IsCity(*this)) {
+  if (IsOfficeProject(*this)) {
+    if (sphere_targets > 0 || checker_targets > 0 || add_far_station || traffic.vehicles > 0 || traffic.pedestrians > 0)
+      return MakeError(ErrorCode::kInvalidArgument,
+                       "project: targets, traffic and the far station are simulated on the street scene only, not "
+                       "on the office floor");
+    if (OfficeLength(*this) > 400.0)
+      return MakeError(ErrorCode::kInvalidArgument, "project: the office corridor would be " +
+                                                        std::to_string(OfficeLength(*this)) +
+                                                        " m long; reduce the stations or the spacing (max 400 m)");
+  } else if (IsCity(*this)) {
     if (sphere_targets > 0 || checker_targets > 0 || add_far_station || traffic.vehicles > 0 || traffic.pedestrians > 0)
       return MakeError(ErrorCode::kInvalidArgument,
                        "project: targets, traffic and the far station are simulated on the street scene only, not "
@@ -133,6 +176,12 @@ std::vector<Eigen::Isometry3d> SimulatedStationPoses(const SimulatedProjectOptio
     sim::Rng place(sim::Hash(o.seed, 0xc17));
     for (const Eigen::Vector3d& p : CityStations(o, *city, place))
       poses.push_back(StationPose(rng, p, o.max_tilt_deg * kDeg));
+    return poses;
+  }
+  if (IsOfficeProject(o)) {
+    std::vector<Eigen::Isometry3d> poses;
+    sim::Rng place(sim::Hash(o.seed, 0x0ff1ce));
+    for (const Eigen::Vector3d& p : OfficeStations(o, place)) poses.push_back(StationPose(rng, p, o.max_tilt_deg * kDeg));
     return poses;
   }
   const double lateral = std::min(1.5, 0.2 * o.spacing_m);

@@ -96,6 +96,11 @@ struct SceneOptions {
     kRepeatedWindows,  // identical buildings and window grids on both sides, plain ground; only the
                        // street furniture (posts, trees, cars) is distinctive
     kCity,             // a grid of blocks whose streets close loops (scene_city.cc); street length unused
+    kOffice,           // an office floor (scene_office.cc): a corridor along x, street_length_m long, with
+                       // same-size rooms behind regularly spaced doors, ceiling lights, painted walls;
+                       // furniture differs from room to room
+    kOfficeIdentical,  // the same floor with every room furnished alike and both ends alike: symmetric
+                       // under a 180° turn and periodic by one room along the corridor
   };
   Kind kind = Kind::kStreet;
   std::uint64_t seed = 1;

@@ -118,4 +118,9 @@ struct Builder {
 namespace scanreg {
 // Adds the city of a kCity scene (ground, blocks, furniture) to `scene` (scene_city.cc).
 void AddCity(const SceneOptions& options, Scene& scene, sim::Rng& rng);
+// Adds the office floor of a kOffice or kOfficeIdentical scene (scene_office.cc).
+void AddOffice(const SceneOptions& options, Scene& scene, sim::Rng& rng);
+inline bool IsOffice(SceneOptions::Kind kind) {
+  return kind == SceneOptions::Kind::kOffice || kind == SceneOptions::Kind::kOfficeIdentical;
+}
 }  // namespace scanreg

@@ -217,10 +217,12 @@ Scene MakeScene(const SceneOptions& options) {
   o.street_half_width_m = std::clamp(o.street_half_width_m, 6.0, 50.0);
   const bool repeated = o.kind == SceneOptions::Kind::kRepeatedWindows;
   Scene scene;
-  Rng rng(sim::Hash(o.seed, o.kind == SceneOptions::Kind::kCity ? 3 : repeated ? 2 : 1));
+  Rng rng(sim::Hash(o.seed, static_cast<int>(o.kind) + 1));
   Builder b{scene, rng, repeated};
   if (o.kind == SceneOptions::Kind::kCity) {
     AddCity(o, scene, rng);
+  } else if (IsOffice(o.kind)) {
+    AddOffice(o, scene, rng);
   } else {
     // The ground: large enough that a scanner anywhere on the street sees ground to its max range.
     scene.AddRectangle(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitY(), 0.5 * o.street_length_m + 300.0, 300.0,
