@@ -63,7 +63,8 @@ json PairResultToJson(const PairResult& r) {
           {"coarse_parent_from_child", io::PoseToJson(r.coarse_parent_from_child)},
           {"coarse_ok", r.coarse_ok},
           {"coarse_inlier_matches", r.coarse_inlier_matches},
-          {"needs_loop", r.needs_loop}};
+          {"needs_loop", r.needs_loop},
+          {"needs_loop_if_checkable", r.needs_loop_if_checkable}};
 }
 
 Expected<PairResult> PairResultFromJson(const json& j, const std::string& where) {
@@ -80,6 +81,7 @@ Expected<PairResult> PairResultFromJson(const json& j, const std::string& where)
     r.coarse_ok = j.at("coarse_ok").get<bool>();
     r.coarse_inlier_matches = j.at("coarse_inlier_matches").get<std::vector<int>>();
     r.needs_loop = j.at("needs_loop").get<bool>();
+    r.needs_loop_if_checkable = j.value("needs_loop_if_checkable", false);
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, where + ": " + e.what());
   }

@@ -395,11 +395,12 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     if (Distinct(best.parent_from_child, hyps[rank[k]].parent_from_child, options.coarse)) rival = &hyps[rank[k]];
   if (rival && Score(best) >= options.thresholds.weak_overlap &&
       Score(*rival) >= options.coarse.ambiguity_ratio * Score(best)) {
-    return fail(Format("ambiguous: two poses %.2f m apart fit the surfaces almost equally (score %.2f vs ",
-                       (best.parent_from_child.translation() - rival->parent_from_child.translation()).norm(),
-                       Score(best)) +
-                Format("%.2f: overlap discounted by free-space conflicts); repeated structure — set the parent by hand",
-                       Score(*rival)));
+    const Eigen::Isometry3d rival_from_best = rival->parent_from_child.inverse() * best.parent_from_child;
+    return fail(Format("ambiguous: a pose %.2f m away", rival_from_best.translation().norm()) +
+                Format(" and turned %.0f° fits the surfaces almost as well (score %.2f against ",
+                       RotationAngle(rival_from_best.linear()) * 180.0 / M_PI, Score(*rival)) +
+                Format("%.2f here: overlap discounted by free-space conflicts); repeated structure — set the parent by hand",
+                       Score(best)));
   }
   // A pose that a plan-view start also reached is judged as a plan-view pose when too few
   // correspondences confirm it (sparse stations: the features are not where the evidence is).
@@ -411,6 +412,15 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     if (link.status == io::LinkStatus::kOk && coarse->ambiguous) {
       link.status = io::LinkStatus::kWeak;
       link.reason = "features were ambiguous (" + coarse->reason + "); the surfaces decided";
+    }
+    // Points in the other scanner's free space are evidence against the pose, not just a lack of
+    // evidence for it: a weak link with static conflicts places a scan only when a loop through
+    // other scans confirms it (issue 38: a room fits another room turned 180° with 9-12 consistent
+    // correspondences, 84 % overlap and 4.2-4.8 % conflict — the furniture that differs).
+    if (link.status == io::LinkStatus::kWeak && link.conflict > options.thresholds.weak_conflict) {
+      link.reason += Format("; %.1f %% of the points lie in the other scanner's free space; a loop confirms it",
+                            100 * link.conflict);
+      result.needs_loop_if_checkable = true;
     }
     return finish();
   }

@@ -68,8 +68,12 @@ struct PairResult {
   bool coarse_ok = false;
   std::vector<int> coarse_inlier_matches;  // indices into `matches` of the coarse RANSAC inliers, ascending
   // Evidence too weak to chain on its own (a plan-view pose with object-sized conflicts): the link
-  // is failed unless a loop through another scan closes on it (registration_driver.h).
+  // is failed unless a loop through another scan closes on it (tree_walk.h).
   bool needs_loop = false;
+  // Evidence against the pose (a weak link with static free-space conflicts): the same, but only
+  // when the child has another neighbour to close a loop through — a lone pair stays weak.
+  bool needs_loop_if_checkable = false;
+  bool NeedsLoop() const { return needs_loop || needs_loop_if_checkable; }
 };
 
 // matches: parent's SIFT descriptors (query) matched in the child (train); geometric: FPFH matches

@@ -129,7 +129,7 @@ class Walker {
     const int parent = order().parent[child];
     if (parent < 0 || choices_.kept.count({parent, child})) return partners;  // the user's link: never failed by a check
     const PairResult* link = book_.Find(parent, child);
-    const bool needs_loop = link->needs_loop;
+    const bool needs_loop = link->NeedsLoop();
     if (!CheckAll() && !needs_loop && link->link.status == io::LinkStatus::kOk) return partners;
     // A loop that confirms a link leaves the child's subtree: a scan placed through the child
     // closes a loop of the subtree's own links, whatever the link to the parent is.
@@ -169,7 +169,7 @@ class Walker {
     std::vector<int> check_order;
     for (int pass = 0; pass < 2; ++pass)
       for (int child : order().order)
-        if (order().parent[child] >= 0 && book_.At(order().parent[child], child).needs_loop == (pass == 0))
+        if (order().parent[child] >= 0 && book_.At(order().parent[child], child).NeedsLoop() == (pass == 0))
           check_order.push_back(child);
     for (int child : check_order)
       if (CheckLink(child)) return true;
@@ -180,7 +180,7 @@ class Walker {
   bool CheckLink(int child) {
     const int parent = order().parent[child];
     if (choices_.kept.count({parent, child})) return false;  // the user's link: never failed by a check
-    const bool needs_loop = book_.At(parent, child).needs_loop;
+    const bool needs_loop = book_.At(parent, child).NeedsLoop();
     if (!CheckAll() && !needs_loop && book_.At(parent, child).link.status == io::LinkStatus::kOk) return false;
     const std::vector<std::pair<int, int>> partners = CheckPartners(child);
     const std::vector<Eigen::Isometry3d>& world = walk_.world;
@@ -197,7 +197,7 @@ class Walker {
       if (gap.position_m <= options_.loop_tolerance_m && gap.angle_rad <= options_.loop_tolerance_rad) {
         // A check that itself needs a loop does not confirm one: two plan-view poses from
         // neighbouring scans agree on the same wrong street as readily as on the right one.
-        if (needs_loop && check.needs_loop) continue;
+        if (needs_loop && check.NeedsLoop()) continue;
         return false;  // closed
       }
       char buf[200];
@@ -205,16 +205,27 @@ class Walker {
                     scans_[child].name.c_str(), scans_[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
       // Both links are failed — unless only the link checked needs a loop: then it is the suspect,
       // and the sound check stays (it may place the child once the suspect is gone).
-      const bool only_suspect = needs_loop && !check.needs_loop;
+      const bool only_suspect = needs_loop && !check.NeedsLoop();
       LogWarning(std::string(buf) + (only_suspect ? "; the link that needed a loop failed" : "; both links failed"));
       book_.Fail(parent, child, buf);
       if (!only_suspect) book_.Fail(use_reverse ? child : best, use_reverse ? best : child, buf);
       return true;
     }
-    if (needs_loop) {
+    // A lone pair (the child has no other candidate neighbour at all, whatever became of its links)
+    // cannot close a loop: evidence against its pose leaves it weak; a plan-view pose without
+    // features still fails.
+    bool lone = true;
+    for (int q = 0; q < n_ && lone; ++q)
+      lone = q == child || q == parent ||
+             std::max(walk_.weights(q, child), walk_.weights(child, q)) < source_.min_check_weight;
+    if (needs_loop && (book_.At(parent, child).needs_loop || !lone)) {
       const std::string why = book_.At(parent, child).link.reason;
       book_.Fail(parent, child, why.substr(0, why.find("; a loop")) + "; no loop through another scan confirms it");
       return true;
+    }
+    if (needs_loop) {
+      std::string& why = book_.At(parent, child).link.reason;
+      why = why.substr(0, why.find("; a loop")) + "; no other scan overlaps to confirm it by a loop";
     }
     return false;
   }

@@ -1,0 +1,79 @@
+// Issue 38: interiors. An office floor — a corridor with same-size rooms behind regularly spaced
+// doors, ceiling lights every 3 m, painted walls — aliases: a room fits another room turned 180°, a
+// corridor fits itself shifted. Whatever it registers, no scan may be placed wrong and no accepted
+// link may be wrong; the data must contain such wrong poses for the test to mean anything.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/geometry/transform.h"
+#include "core/pipeline/register_project.h"
+#include "core/simulate/project_sim.h"
+
+namespace scanreg::pipeline {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+
+std::vector<Scan> SimulateOffice(SceneOptions::Kind kind, std::uint64_t seed) {
+  SimulatedProjectOptions o;
+  o.scene.kind = kind;
+  o.stations = 8;
+  o.spacing_m = 8.0;
+  o.scanner.cols = 1000;
+  o.scanner.rows = 250;
+  o.seed = o.scanner.seed = o.scene.seed = seed;
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> scans = SimulateProject(o, progress, cancel);
+  EXPECT_TRUE(scans.ok()) << scans.error().ToString();
+  return scans.ok() ? std::move(*scans) : std::vector<Scan>{};
+}
+
+PoseError LinkError(const std::vector<Scan>& scans, const io::LinkRecord& l) {
+  const Scan* p = nullptr;
+  const Scan* c = nullptr;
+  for (const Scan& s : scans) {
+    if (s.name == l.parent) p = &s;
+    if (s.name == l.child) c = &s;
+  }
+  return ComparePoses(l.parent_from_child, p->reference_world_from_scan->inverse() * *c->reference_world_from_scan);
+}
+
+void ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed) {
+  const std::vector<Scan> scans = SimulateOffice(kind, seed);
+  ASSERT_EQ(scans.size(), 8u);
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, RegisterOptions{}, progress, cancel);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  const std::vector<ReferenceError> errors = ReferenceErrors(*r, scans);
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    if (!r->scans[i].registered) {
+      EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name << " left out without a reason";
+      continue;
+    }
+    EXPECT_LE(errors[i].position_m, 0.02) << scans[i].name << " registered wrong";
+    EXPECT_LE(errors[i].angle_rad * kDeg, 0.1) << scans[i].name << " registered wrong";
+  }
+  int aliased = 0;  // pair poses a metre or more from the truth: the floor's aliasing
+  for (const io::LinkRecord& l : r->links) {
+    const PoseError e = LinkError(scans, l);
+    const bool wrong = e.position_m > 1.0 || e.angle_rad * kDeg > 5.0;
+    aliased += wrong;
+    if (l.status == io::LinkStatus::kFailed) continue;
+    EXPECT_LE(e.position_m, 0.05) << l.parent << "-" << l.child << " accepted but wrong (" << l.method << ", "
+                                  << l.reason << ")";
+    EXPECT_LE(e.angle_rad * kDeg, 0.2) << l.parent << "-" << l.child;
+  }
+  EXPECT_GE(aliased, 1) << "the floor gave no wrong pair pose: the test would prove nothing";
+}
+
+// Same-size rooms with different furniture: a room fits another room turned 180° with 9-12
+// consistent correspondences and 4.8 % free-space conflict, and a corridor station fits another
+// with the scanners on top of each other. (The identical floor, SceneOptions::kOfficeIdentical,
+// still gets wrong links accepted: issue 38 stays open for it.)
+TEST(Interiors, NoScanOfAnOfficeFloorIsPlacedWrong) { ExpectNothingWrong(SceneOptions::Kind::kOffice, 1); }
+
+}  // namespace
+}  // namespace scanreg::pipeline
