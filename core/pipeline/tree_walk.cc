@@ -223,9 +223,10 @@ class Walker {
       book_.Fail(parent, child, why.substr(0, why.find("; a loop")) + "; no loop through another scan confirms it");
       return true;
     }
-    if (needs_loop) {
+    if (needs_loop) {  // said once, however often the tree is walked again
       std::string& why = book_.At(parent, child).link.reason;
-      why = why.substr(0, why.find("; a loop")) + "; no other scan overlaps to confirm it by a loop";
+      const std::string lone = "; no other scan overlaps to confirm it by a loop";
+      if (why.find(lone) == std::string::npos) why = why.substr(0, why.find("; a loop")) + lone;
     }
     return false;
   }
