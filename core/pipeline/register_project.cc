@@ -564,6 +564,18 @@ std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, c
   return errors;
 }
 
+std::optional<PoseError> LinkReferenceError(const io::LinkRecord& link, const std::vector<Scan>& scans) {
+  const Scan* parent = nullptr;
+  const Scan* child = nullptr;
+  for (const Scan& s : scans) {
+    if (s.name == link.parent) parent = &s;
+    if (s.name == link.child) child = &s;
+  }
+  if (!parent || !child || !parent->reference_world_from_scan || !child->reference_world_from_scan) return std::nullopt;
+  return ComparePoses(link.parent_from_child,
+                      parent->reference_world_from_scan->inverse() * *child->reference_world_from_scan);
+}
+
 std::vector<ReferenceError> ReferenceErrors(const io::Project& project) {
   // The saved result as the registration returned it; the scans need only their reference poses.
   ProjectRegistration result;

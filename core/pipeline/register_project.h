@@ -13,6 +13,7 @@
 #include "core/common/progress.h"
 #include "core/features/confusion.h"
 #include "core/geometry/scan.h"
+#include "core/geometry/transform.h"
 #include "core/io/project.h"
 #include "core/pipeline/register_options.h"
 #include "core/pipeline/register_pair.h"
@@ -143,5 +144,8 @@ struct ReferenceError {
 std::vector<ReferenceError> ReferenceErrors(const ProjectRegistration& result, const std::vector<Scan>& scans);
 // The same for a saved project (its poses, coarse poses and reference poses); none without a root.
 std::vector<ReferenceError> ReferenceErrors(const io::Project& project);
+// Error of a link's parent_from_child against the reference poses of its two scans (found by name
+// in `scans`); none when either scan or its reference pose is missing.
+std::optional<PoseError> LinkReferenceError(const io::LinkRecord& link, const std::vector<Scan>& scans);
 
 }  // namespace scanreg::pipeline

@@ -55,21 +55,17 @@ double OfficeLength(const SimulatedProjectOptions& o) {
 // apart along its axis. Furniture stands clear of the room stations (scene_office.cc).
 std::vector<Eigen::Vector3d> OfficeStations(const SimulatedProjectOptions& o, sim::Rng& rng) {
   const int corridor = (o.stations + 1) / 2;
-  const double room = 4.0, half_l = 0.5 * room * std::max(2, static_cast<int>(std::round(OfficeLength(o) / room)));
-  const bool identical = o.scene.kind == SceneOptions::Kind::kOfficeIdentical;
   std::vector<Eigen::Vector3d> out;
   for (int i = 0; i < corridor; ++i) {
     const double x = (i - 0.5 * (corridor - 1)) * o.spacing_m + rng.Uniform(-0.1, 0.1) * std::min(o.spacing_m, 4.0);
     out.emplace_back(x, rng.Uniform(-0.3, 0.3), rng.Uniform(1.4, 1.7));
     if (static_cast<int>(out.size()) == o.stations) break;
     const double side = i % 2 == 0 ? 1.0 : -1.0;
-    // The door nearest to x on that side (scene_office.cc: 0.6 m from the room's -x wall on +y,
-    // mirrored on -y; centred in kOfficeIdentical), and a station in front of it inside the room.
-    const double door_from = identical ? 0.5 * (room - 0.9) : 0.6;
-    const double from = side > 0 ? door_from : room - door_from - 0.9;
-    const int k = std::clamp(static_cast<int>(std::floor((x + half_l) / room)), 0, static_cast<int>(2 * half_l / room) - 1);
-    const double door = -half_l + k * room + from + 0.45;
-    out.emplace_back(door + rng.Uniform(-0.4, 0.4), side * (1.12 + rng.Uniform(1.2, 1.7)), rng.Uniform(1.4, 1.7));
+    SceneOptions floor = o.scene;
+    floor.street_length_m = OfficeLength(o);
+    const double door = OfficeDoorCentre(floor, x, side);
+    out.emplace_back(door + rng.Uniform(-0.4, 0.4), side * (OfficeRoomFace() + rng.Uniform(1.2, 1.7)),
+                     rng.Uniform(1.4, 1.7));
   }
   return out;
 }

@@ -120,6 +120,10 @@ namespace scanreg {
 void AddCity(const SceneOptions& options, Scene& scene, sim::Rng& rng);
 // Adds the office floor of a kOffice or kOfficeIdentical scene (scene_office.cc).
 void AddOffice(const SceneOptions& options, Scene& scene, sim::Rng& rng);
+// Office floors: the x of the centre of the door nearest to x on the side y > 0 (side +1) or y < 0
+// (-1), and |y| of the corridor walls' room face.
+double OfficeDoorCentre(const SceneOptions& options, double x, double side);
+double OfficeRoomFace();
 inline bool IsOffice(SceneOptions::Kind kind) {
   return kind == SceneOptions::Kind::kOffice || kind == SceneOptions::Kind::kOfficeIdentical;
 }

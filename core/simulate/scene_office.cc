@@ -61,18 +61,41 @@ std::vector<Piece> Furniture(Rng& rng, double room_width, double depth) {
   return out;
 }
 
+constexpr double kRoomWidth = 4.0, kRoomDepth = 5.0;
+
+int RoomsPerSide(const SceneOptions& o) {
+  return std::max(2, static_cast<int>(std::round(o.street_length_m / kRoomWidth)));
+}
+
+// Where a room's door starts, from the room's -x wall: the same in every room on the +y side,
+// mirrored on the -y side (so that a 180° turn maps a room onto a room), centred on kOfficeIdentical.
+double DoorFrom(const SceneOptions& o, double side) {
+  const double from = o.kind == SceneOptions::Kind::kOfficeIdentical ? 0.5 * (kRoomWidth - kDoorWidth) : 0.6;
+  return side > 0 ? from : kRoomWidth - from - kDoorWidth;
+}
+
 }  // namespace
+
+double OfficeRoomFace() { return kHalfCorridor + kWall; }
+
+double OfficeDoorCentre(const SceneOptions& o, double x, double side) {
+  const int rooms = RoomsPerSide(o);
+  const double half_l = 0.5 * rooms * kRoomWidth;
+  const int k = std::clamp(static_cast<int>(std::floor((x + half_l) / kRoomWidth)), 0, rooms - 1);
+  return -half_l + k * kRoomWidth + DoorFrom(o, side) + 0.5 * kDoorWidth;
+}
 
 void AddOffice(const SceneOptions& o, Scene& s, Rng& rng) {
   const bool identical = o.kind == SceneOptions::Kind::kOfficeIdentical;
-  const double room_width = 4.0, depth = 5.0;
-  const int rooms = std::max(2, static_cast<int>(std::round(o.street_length_m / room_width)));  // per side
+  const double room_width = kRoomWidth, depth = kRoomDepth;
+  const int rooms = RoomsPerSide(o);
   const double half_l = 0.5 * rooms * room_width;
   const double back = kHalfCorridor + kWall + depth;  // |y| of the outer walls' room face
+  Builder b{s, rng, identical};
 
   // Painted surfaces: almost no reflectance contrast.
-  const int paint = s.AddTexture(Builder{s, rng, identical}.Noisy(0.72f, identical ? 0.004f : 0.012f, 1.5));
-  const int floor = s.AddTexture(Builder{s, rng, identical}.Noisy(0.35f, 0.02f, 0.8));
+  const int paint = s.AddTexture(b.Noisy(0.72f, identical ? 0.004f : 0.012f, 1.5));
+  const int floor = s.AddTexture(b.Noisy(0.35f, 0.02f, 0.8));
   const int ceiling = s.AddTexture(SurfaceTexture::Uniform(0.8f));
   const int lamp = s.AddTexture(SurfaceTexture::Uniform(0.95f));
   const int glass = s.AddTexture(SurfaceTexture::Uniform(0.06f));
@@ -103,15 +126,12 @@ void AddOffice(const SceneOptions& o, Scene& s, Rng& rng) {
 
   // The corridor walls with a door per room, the same place in every room.
   const std::vector<Piece> shared = Furniture(rng, room_width, depth);
-  const double door_from = identical ? 0.5 * (room_width - kDoorWidth) : 0.6;  // from the room's -x wall
   for (int side : {-1, 1}) {
     const double y0 = side * kHalfCorridor, y1 = side * (kHalfCorridor + kWall);
     const double ylo = std::min(y0, y1), yhi = std::max(y0, y1);
     for (int k = 0; k < rooms; ++k) {
       const double x0 = -half_l + k * room_width;
-      // Mirrored on the -y side so that a 180° turn maps a room onto a room (kOfficeIdentical).
-      const double from = side > 0 ? door_from : room_width - door_from - kDoorWidth;
-      const double d0 = x0 + from, d1 = d0 + kDoorWidth;
+      const double d0 = x0 + DoorFrom(o, side), d1 = d0 + kDoorWidth;
       Span(s, Vec3(x0, ylo, 0), Vec3(d0, yhi, kCeiling), paint);
       Span(s, Vec3(d1, ylo, 0), Vec3(x0 + room_width, yhi, kCeiling), paint);
       Span(s, Vec3(d0, ylo, kDoorHeight), Vec3(d1, yhi, kCeiling), paint);
@@ -141,7 +161,7 @@ void AddOffice(const SceneOptions& o, Scene& s, Rng& rng) {
       for (int k = 0; k < rooms; ++k) {
         if (!rng.Chance(0.35)) continue;
         const double x = -half_l + k * room_width + rng.Uniform(2.0, room_width - 0.8);
-        const int board = s.AddTexture(Builder{s, rng, false}.Poster(static_cast<float>(rng.Uniform(0.4, 0.8))));
+        const int board = s.AddTexture(b.Poster(static_cast<float>(rng.Uniform(0.4, 0.8))));
         s.AddRectangle(Vec3(x, y0 - side * 0.015, 1.5), Vec3::UnitX(), Vec3::UnitZ(), 0.5, 0.4, board);
       }
     }

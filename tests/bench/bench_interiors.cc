@@ -6,6 +6,7 @@
 // the baseline): pairs right, wrong accepts, time per pair.
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,15 +71,8 @@ void RunInteriorsBench(Table& table, bool quick) {
     for (const io::LinkRecord& l : r->links) {
       ambiguous += l.reason.find("ambiguous") != std::string::npos;
       if (l.status == io::LinkStatus::kFailed) continue;
-      const Scan* p = nullptr;
-      const Scan* c = nullptr;
-      for (const Scan& s : *scans) {
-        if (s.name == l.parent) p = &s;
-        if (s.name == l.child) c = &s;
-      }
-      wrong_links += !Right(ComparePoses(l.parent_from_child, p->reference_world_from_scan->inverse() *
-                                                                  *c->reference_world_from_scan),
-                            0.05, 0.2);
+      const std::optional<PoseError> e = pipeline::LinkReferenceError(l, *scans);
+      wrong_links += e && !Right(*e, 0.05, 0.2);
     }
     char note[200];
     std::snprintf(note, sizeof note, "%d of %d registered, %d of them wrong; %d accepted links wrong; %d links "

@@ -79,14 +79,7 @@ void ExpectAllRegisteredAndNoWrongLink(const std::vector<Scan>& scans, const Pro
   for (const io::LinkRecord& l : r.links) {
     if (l.status == io::LinkStatus::kFailed) continue;
     ++accepted;
-    const Scan* p = nullptr;
-    const Scan* c = nullptr;
-    for (const Scan& s : scans) {
-      if (s.name == l.parent) p = &s;
-      if (s.name == l.child) c = &s;
-    }
-    const PoseError e =
-        ComparePoses(l.parent_from_child, p->reference_world_from_scan->inverse() * *c->reference_world_from_scan);
+    const PoseError e = *LinkReferenceError(l, scans);
     EXPECT_LE(e.position_m, 0.05) << l.parent << "-" << l.child << " accepted but wrong (" << l.method << ")";
     EXPECT_LE(e.angle_rad * kDeg, 0.2) << l.parent << "-" << l.child;
   }

@@ -30,16 +30,6 @@ std::vector<Scan> SimulateOffice(SceneOptions::Kind kind, std::uint64_t seed) {
   return scans.ok() ? std::move(*scans) : std::vector<Scan>{};
 }
 
-PoseError LinkError(const std::vector<Scan>& scans, const io::LinkRecord& l) {
-  const Scan* p = nullptr;
-  const Scan* c = nullptr;
-  for (const Scan& s : scans) {
-    if (s.name == l.parent) p = &s;
-    if (s.name == l.child) c = &s;
-  }
-  return ComparePoses(l.parent_from_child, p->reference_world_from_scan->inverse() * *c->reference_world_from_scan);
-}
-
 void ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed) {
   const std::vector<Scan> scans = SimulateOffice(kind, seed);
   ASSERT_EQ(scans.size(), 8u);
@@ -58,7 +48,7 @@ void ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed) {
   }
   int aliased = 0;  // pair poses a metre or more from the truth: the floor's aliasing
   for (const io::LinkRecord& l : r->links) {
-    const PoseError e = LinkError(scans, l);
+    const PoseError e = *LinkReferenceError(l, scans);
     const bool wrong = e.position_m > 1.0 || e.angle_rad * kDeg > 5.0;
     aliased += wrong;
     if (l.status == io::LinkStatus::kFailed) continue;

@@ -43,18 +43,6 @@ Expected<ProjectRegistration> Register(const std::vector<Scan>& scans, const Reg
   return RegisterScans(scans, UserChoices{overrides, {}, {}}, options, progress, cancel);
 }
 
-// Error of a link's relative pose against the truth.
-PoseError LinkError(const io::LinkRecord& l, const std::vector<Scan>& scans) {
-  const Scan* p = nullptr;
-  const Scan* c = nullptr;
-  for (const Scan& s : scans) {
-    if (s.name == l.parent) p = &s;
-    if (s.name == l.child) c = &s;
-  }
-  const Eigen::Isometry3d truth = p->reference_world_from_scan->inverse() * *c->reference_world_from_scan;
-  return ComparePoses(l.parent_from_child, truth);
-}
-
 class StreetProject : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { scans_ = new std::vector<Scan>(Simulate(StreetOptions(6))); }
@@ -229,7 +217,7 @@ TEST(RegisterProjectTest, RepeatedWindowsNeverYieldAWrongAcceptedLink) {
         EXPECT_FALSE(l.reason.empty());
         continue;
       }
-      const PoseError e = LinkError(l, scans);
+      const PoseError e = *LinkReferenceError(l, scans);
       EXPECT_LT(e.position_m, 0.10) << l.parent << " <- " << l.child << " accepted with a wrong pose";
       EXPECT_LT(e.angle_rad * kDeg, 0.5) << l.parent << " <- " << l.child;
     }
