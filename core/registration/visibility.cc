@@ -6,23 +6,41 @@
 #include <numeric>
 #include <unordered_map>
 
+#include <Eigen/SVD>
+
 namespace scanreg {
 namespace {
 
-// Maps a direction to a grid cell of a scan with a regular angular grid; false outside it.
+// Maps a point (observer frame) to a grid cell; false outside the grid or when the grid's viewing
+// geometry is unknown. Two kinds of grid: panoramic (a TLS scan: columns are azimuths, rows
+// elevations, scan.angles) and perspective (a depth camera, an organized cloud from one: the
+// pixel is a projective map of the direction, (col, row, 1) ~ H p, in any orientation of the
+// camera's frame). The perspective map is fitted to the grid's own points (direct linear
+// transform); a grid neither panoramic nor perspective (a triangulation scanner's range grid) has
+// no viewing geometry here, and free space is not tested against it.
 class GridProjector {
  public:
   explicit GridProjector(const Scan& scan) : scan_(scan) {
-    const auto& az = scan.angles.azimuth;
-    const auto& el = scan.angles.elevation;
-    az0_ = az.front();
-    daz_ = (az.back() - az.front()) / (scan.cols - 1);
-    el0_ = el.front();
-    del_ = (el.back() - el.front()) / (scan.rows - 1);
-    wraps_ = std::abs(daz_ * scan.cols) > 2 * M_PI * 0.97;
+    if (scan.rows < 3 || scan.cols < 3) return;
+    if (!scan.angles.empty()) {
+      const auto& az = scan.angles.azimuth;
+      const auto& el = scan.angles.elevation;
+      az0_ = az.front();
+      daz_ = (az.back() - az.front()) / (scan.cols - 1);
+      el0_ = el.front();
+      del_ = (el.back() - el.front()) / (scan.rows - 1);
+      wraps_ = std::abs(daz_ * scan.cols) > 2 * M_PI * 0.97;
+      kind_ = Kind::kPanoramic;
+    } else if (FitPerspective()) {
+      kind_ = Kind::kPerspective;
+    }
   }
 
+  bool known() const { return kind_ != Kind::kNone; }
+
   bool Project(const Eigen::Vector3d& p, int* row, int* col) const {
+    if (kind_ == Kind::kPerspective) return ProjectPerspective(p, row, col);
+    if (kind_ != Kind::kPanoramic) return false;
     const double az = std::atan2(p.y(), p.x());
     const double el = std::atan2(p.z(), std::hypot(p.x(), p.y()));
     double da = std::remainder(az - az0_, 2 * M_PI);
@@ -40,9 +58,66 @@ class GridProjector {
   }
 
  private:
+  enum class Kind { kNone, kPanoramic, kPerspective };
+
+  bool ProjectPerspective(const Eigen::Vector3d& p, int* row, int* col) const {
+    const Eigen::Vector3d h = h_ * p;
+    if (!(h.z() > 1e-12 * p.norm())) return false;  // behind the camera
+    const long ci = std::lround(h.x() / h.z()), ri = std::lround(h.y() / h.z());
+    if (ri < 0 || ri >= scan_.rows || ci < 0 || ci >= scan_.cols) return false;
+    *row = static_cast<int>(ri);
+    *col = static_cast<int>(ci);
+    return true;
+  }
+
+  // Fits h_ to the valid cells of a sub-grid (about 60 x 60) and keeps it when every sample lies in
+  // front and the RMS reprojection error is under a quarter of a cell: only a true pinhole grid.
+  bool FitPerspective() {
+    const int step = std::max(1, std::max(scan_.rows, scan_.cols) / 60);
+    std::vector<Eigen::Vector3d> dirs;
+    std::vector<Eigen::Vector2d> cells;
+    for (int r = 0; r < scan_.rows; r += step)
+      for (int c = 0; c < scan_.cols; c += step)
+        if (scan_.IsValid(r, c) && scan_.Point(r, c).norm() > 0.0f) {
+          dirs.push_back(scan_.Point(r, c).cast<double>().normalized());
+          cells.emplace_back(c, r);
+        }
+    if (dirs.size() < 50) return false;
+    // Pixels scaled to about [-1, 1] for conditioning (Hartley normalisation).
+    const double s = 2.0 / std::max(scan_.rows, scan_.cols);
+    const Eigen::Vector2d centre(0.5 * (scan_.cols - 1), 0.5 * (scan_.rows - 1));
+    Eigen::MatrixXd a(2 * dirs.size(), 9);
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+      const Eigen::Vector2d u = s * (cells[i] - centre);
+      const Eigen::RowVector3d d = dirs[i].transpose();
+      a.row(2 * i) << d, Eigen::RowVector3d::Zero(), -u.x() * d;
+      a.row(2 * i + 1) << Eigen::RowVector3d::Zero(), d, -u.y() * d;
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
+    const Eigen::VectorXd v = svd.matrixV().col(8);
+    Eigen::Matrix3d hn;
+    hn << v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8);
+    // Back to pixels: u_pix = u / s + centre.
+    Eigen::Matrix3d denorm;
+    denorm << 1.0 / s, 0, centre.x(), 0, 1.0 / s, centre.y(), 0, 0, 1;
+    h_ = denorm * hn;
+    int front = 0;
+    for (const Eigen::Vector3d& d : dirs) front += (h_ * d).z() > 0 ? 1 : -1;
+    if (front < 0) h_ = -h_;
+    double sum = 0.0;
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+      const Eigen::Vector3d h = h_ * dirs[i];
+      if (!(h.z() > 0)) return false;
+      sum += (h.head<2>() / h.z() - cells[i]).squaredNorm();
+    }
+    return std::sqrt(sum / dirs.size()) < 0.25;
+  }
+
   const Scan& scan_;
-  double az0_, daz_, el0_, del_;
-  bool wraps_;
+  Kind kind_ = Kind::kNone;
+  double az0_ = 0, daz_ = 0, el0_ = 0, del_ = 0;
+  bool wraps_ = false;
+  Eigen::Matrix3d h_ = Eigen::Matrix3d::Zero();
 };
 
 // The nearest return of the observer's 3x3 cells around q's projection; false when q does not
@@ -176,8 +251,8 @@ std::vector<int> Cluster(const std::vector<Eigen::Vector3d>& points, double cell
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
                                     const FreeSpaceOptions& options) {
   FreeSpaceResult result;
-  if (observer.angles.empty() || observer.rows < 3 || observer.cols < 3) return result;
   const GridProjector projector(observer);
+  if (!projector.known()) return result;
   const std::vector<std::size_t> samples = SampleIndices(other, options);
   std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
   std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
@@ -219,8 +294,8 @@ PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isom
 void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
                          double margin_m, std::vector<std::uint8_t>* mask) {
   mask->resize(other.size(), 0);
-  if (observer.angles.empty() || observer.rows < 3 || observer.cols < 3) return;
   const GridProjector projector(observer);
+  if (!projector.known()) return;
   std::vector<std::uint8_t>& m = *mask;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < static_cast<long>(other.size()); ++i) {
