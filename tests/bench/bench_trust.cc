@@ -4,7 +4,8 @@
 // consistency measure (no ground truth) before and after, and the time — for scanreg with the
 // multi-view step (default), without it (the pose graph alone), and PCL's LUM (Lu & Milios
 // multiview, correspondences found anew at each of a shrinking schedule of distances) as the
-// in-run baseline.
+// in-run baseline. The same for twelve real RGB-D keyframes (TUM fr3_cabinet) at their set's
+// tolerances.
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/registration/lum.h>
@@ -19,6 +20,7 @@
 #include "core/io/pose_file.h"
 #include "core/pipeline/register_project.h"
 #include "tests/bench/bench_table.h"
+#include "tests/support/real_sets.h"
 
 namespace scanreg::bench {
 namespace {
@@ -31,7 +33,8 @@ struct PairCounts {
 };
 
 PairCounts CountPairs(const std::vector<Scan>& scans, const std::vector<Eigen::Isometry3d>& world,
-                      const std::vector<bool>& registered) {
+                      const std::vector<bool>& registered, double within_m = 0.002, double within_deg = 0.5,
+                      double wrong_m = 0.01, double wrong_deg = 2.0) {
   PairCounts c;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     c.registered += registered[i];
@@ -40,8 +43,8 @@ PairCounts CountPairs(const std::vector<Scan>& scans, const std::vector<Eigen::I
       const PoseError e = ComparePoses(world[i].inverse() * world[j], scans[i].reference_world_from_scan->inverse() *
                                                                          *scans[j].reference_world_from_scan);
       ++c.pairs;
-      c.within += e.position_m <= 0.002 && e.angle_rad <= 0.5 / kDeg;
-      c.wrong += e.position_m > 0.01 || e.angle_rad > 2.0 / kDeg;
+      c.within += e.position_m <= within_m && e.angle_rad <= within_deg / kDeg;
+      c.wrong += e.position_m > wrong_m || e.angle_rad > wrong_deg / kDeg;
     }
   }
   return c;
@@ -59,9 +62,10 @@ Eigen::Isometry3d Moved(const Eigen::Isometry3d& pose, std::mt19937& rng) {
 // world at their start poses, LUM's own poses the corrections from there (its linearisation holds
 // for small angles only: given the scans' full poses it walked 1 cm away even from bun.conf), every
 // pair's nearest neighbours within each distance of the schedule (8, 4, 2, 1 mm; 5 LUM iterations
-// each), the first scan fixed. In millimetres (LUM works in single precision).
-std::vector<Eigen::Isometry3d> Lum(const std::vector<Scan>& scans) {
-  constexpr double kUnit = 1000.0;  // LUM's coordinates: millimetres
+// each), the first scan fixed. In millimetres (LUM works in single precision); `unit` 100 runs the same
+// schedule in centimetres (1 cm samples, 8-4-2-1 cm) for room-sized scenes.
+std::vector<Eigen::Isometry3d> Lum(const std::vector<Scan>& scans, double unit = 1000.0) {
+  const double kUnit = unit;  // LUM's coordinates
   using Cloud = pcl::PointCloud<pcl::PointXYZ>;
   pcl::registration::LUM<pcl::PointXYZ> lum;
   for (const Scan& s : scans) {
@@ -108,6 +112,72 @@ std::vector<Eigen::Isometry3d> Lum(const std::vector<Scan>& scans) {
   return out;
 }
 
+// scanreg's refinement from the scans' current poses (what `register` does on imported poses).
+struct Refined {
+  Expected<pipeline::ProjectRegistration> result = MakeError(ErrorCode::kCancelled, "not run");
+  double seconds = 0.0;
+  std::vector<Eigen::Isometry3d> world;
+  std::vector<bool> registered;
+};
+
+Refined Refine(const std::vector<Scan>& scans, bool multiview) {
+  NullProgress progress;
+  CancelToken cancel;
+  pipeline::RegisterOptions o;
+  o.from_current_poses = true;
+  o.multiview = multiview;
+  Refined out;
+  out.seconds = Seconds([&] { out.result = pipeline::RegisterScans(scans, {}, o, progress, cancel); });
+  if (out.result)
+    for (const pipeline::ScanRegistration& s : out.result->scans)
+      out.world.push_back(s.world_from_scan), out.registered.push_back(s.registered);
+  return out;
+}
+
+// The TUM RGB-D cabinet keyframes (tests/support/real_sets.h) from their reference moved by 5 deg /
+// 5 mm: scanreg and LUM (centimetre schedule), judged at the set's tolerances (reference good to a
+// few cm: "within" 4 cm / 2 deg, "beyond" 10 cm / 4 deg).
+void RunTrustBenchTum(Table& table, bool quick) {
+  const char* env = std::getenv("SCANREG_REALDATA");
+  Expected<test::RealSet> set = test::LoadTumCabinet(env ? env : SCANREG_BENCH_REALDATA);
+  if (!set) return table.Add({kSection, "tum_fr3_cabinet", 0.0, "", "skipped: " + set.error().ToString()});
+  const int n = static_cast<int>(set->scans.size());
+  auto describe = [&](const PairCounts& c) {
+    return Fmt("of %.0f pairs within ", c.pairs) + Fmt("%.0f mm / ", 1e3 * set->within_m) +
+           Fmt("%.0f deg; ", set->within_deg) + Fmt("%.0f beyond ", c.wrong) + Fmt("%.0f mm / ", 1e3 * set->wrong_m) +
+           Fmt("%.0f deg", set->wrong_deg);
+  };
+  NullProgress progress;
+  CancelToken cancel;
+  for (unsigned seed = 1; seed <= (quick ? 1u : 2u); ++seed) {
+    std::vector<Scan> scans = set->scans;
+    std::mt19937 rng(seed);
+    for (Scan& s : scans) s.world_from_scan = Moved(*s.reference_world_from_scan, rng);
+    std::vector<Eigen::Isometry3d> start;
+    for (const Scan& s : scans) start.push_back(s.world_from_scan);
+    const std::string run = "tum_fr3_cabinet 12 frames 5 deg / 5 mm, seed " + std::to_string(seed);
+    const PairCounts at_start = CountPairs(scans, start, std::vector<bool>(n, true), set->within_m, set->within_deg,
+                                           set->wrong_m, set->wrong_deg);
+    table.Add({kSection, run + ": start", static_cast<double>(at_start.within), "pairs ok", describe(at_start)});
+    const Refined f = Refine(scans, true);
+    const Expected<pipeline::ProjectRegistration>& r = f.result;
+    if (!r) return table.Add({kSection, run, 0.0, "", "failed: " + r.error().ToString()});
+    const double seconds = f.seconds;
+    const PairCounts c =
+        CountPairs(scans, f.world, f.registered, set->within_m, set->within_deg, set->wrong_m, set->wrong_deg);
+    table.Add({kSection, run + ": scanreg", static_cast<double>(c.within), "pairs ok",
+               describe(c) + Fmt("; %.0f of 12 registered; ", c.registered) +
+                   Fmt("consistency %.2f -> ", r->consistency ? 1e3 * r->consistency->start_rms_m : -1.0) +
+                   Fmt("%.2f mm; ", r->consistency ? 1e3 * r->consistency->result_rms_m : -1.0) + Fmt("%.1f s", seconds)});
+    std::vector<Eigen::Isometry3d> lum;
+    const double lum_seconds = Seconds([&] { lum = Lum(scans, 100.0); });
+    const PairCounts l =
+        CountPairs(scans, lum, std::vector<bool>(n, true), set->within_m, set->within_deg, set->wrong_m, set->wrong_deg);
+    table.Add({kSection, run + ": PCL LUM", static_cast<double>(l.within), "pairs ok",
+               describe(l) + Fmt("; %.1f s (1 cm samples, 8-4-2-1 cm correspondences)", lum_seconds)});
+  }
+}
+
 }  // namespace
 
 void RunTrustBench(Table& table, bool quick) {
@@ -137,16 +207,11 @@ void RunTrustBench(Table& table, bool quick) {
     table.Add({kSection, run + ": start", static_cast<double>(at_start.within), "pairs ok",
                Fmt("of %.0f within 2 mm / 0.5 deg; %.0f beyond 1 cm / 2 deg", at_start.pairs, at_start.wrong)});
     for (bool multiview : {true, false}) {
-      pipeline::RegisterOptions o;
-      o.from_current_poses = true;
-      o.multiview = multiview;
-      Expected<pipeline::ProjectRegistration> r = MakeError(ErrorCode::kCancelled, "not run");
-      const double seconds = Seconds([&] { r = pipeline::RegisterScans(scans, {}, o, progress, cancel); });
+      const Refined f = Refine(scans, multiview);
+      const Expected<pipeline::ProjectRegistration>& r = f.result;
       if (!r) return table.Add({kSection, run, 0.0, "", "failed: " + r.error().ToString()});
-      std::vector<Eigen::Isometry3d> world;
-      std::vector<bool> registered;
-      for (const pipeline::ScanRegistration& s : r->scans) world.push_back(s.world_from_scan), registered.push_back(s.registered);
-      const PairCounts c = CountPairs(scans, world, registered);
+      const double seconds = f.seconds;
+      const PairCounts c = CountPairs(scans, f.world, f.registered);
       const double before = r->consistency ? 1e3 * r->consistency->start_rms_m : -1;
       const double after = r->consistency ? 1e3 * r->consistency->result_rms_m : -1;
       table.Add({kSection, run + (multiview ? ": scanreg" : ": scanreg --no-multiview"), static_cast<double>(c.within),
@@ -171,6 +236,7 @@ void RunTrustBench(Table& table, bool quick) {
                Fmt("of %.0f pairs within 2 mm / 0.5 deg; %.0f beyond 1 cm / 2 deg; ", c.pairs, c.wrong) +
                    Fmt("%.1f s (1 mm samples, 8-4-2-1 mm correspondences)", seconds)});
   }
+  RunTrustBenchTum(table, quick);
 }
 
 }  // namespace scanreg::bench
