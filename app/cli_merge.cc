@@ -17,7 +17,9 @@ int RunMerge(const std::vector<std::string>& argv) {
   auto args = ParseOrHelp(
       "merge", "PROJECT.scanreg.json --out MESH.ply|.obj|.stl [options]   merges the registered scans", argv,
       {{"voxel", true, false, "METRES   voxel size (default 0.02)"},
-       {"method", true, false, "ml|tsdf   maximum-likelihood distance (S, default) or Curless-Levoy TSDF (faster)"},
+       {"method", true, false,
+        "consensus|ml|tsdf   sub-voxel consensus of the measurements (default, most accurate), S's maximum-likelihood "
+        "distance, or Curless-Levoy TSDF (fastest)"},
        {"max-range", true, false, "METRES   leave out returns farther from their scanner (default: all)"},
        {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
@@ -66,12 +68,11 @@ int RunMerge(const std::vector<std::string>& argv) {
   options.remove_small_pieces = !args->Has("keep-pieces");
   options.remove_moving = !args->Has("keep-moving");
   const std::string method = args->Get("method").value_or(merge::MergeMethodName(options.method));
-  if (method == "ml") {
-    options.method = pipeline::MergeMethod::kMaximumLikelihood;
-  } else if (method == "tsdf") {
-    options.method = pipeline::MergeMethod::kTsdf;
+  if (const std::optional<merge::MergeMethod> parsed = merge::ParseMergeMethod(method)) {
+    options.method = *parsed;
   } else {
-    return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: --method must be ml or tsdf, not '" + method + "'"));
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "merge: --method must be consensus, ml or tsdf, not '" + method + "'"));
   }
   if (Status s = options.Validate(); !s) return Fail(s.error());
   const auto points = args->Get("points");
@@ -123,7 +124,7 @@ int RunMerge(const std::vector<std::string>& argv) {
     std::printf("\n");
   }
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
-              project->scans.size(), options.method == pipeline::MergeMethod::kTsdf ? "tsdf" : "ml", options.voxel_m,
+              project->scans.size(), merge::MergeMethodName(options.method), options.voxel_m,
               mesh.triangle_count(), mesh.vertex_count(), result->seconds, out->c_str());
   return 0;
 }

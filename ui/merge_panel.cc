@@ -57,6 +57,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   setObjectName("MergePanel");
   method_ = new QComboBox(this);
   method_->setObjectName("MergeMethod");
+  method_->addItem(tr("Consensus (sub-voxel, most accurate)"), int(merge::MergeMethod::kConsensus));
   method_->addItem(tr("Maximum likelihood (Sagawa et al.)"), int(merge::MergeMethod::kMaximumLikelihood));
   method_->addItem(tr("TSDF (Curless–Levoy, faster)"), int(merge::MergeMethod::kTsdf));
   voxel_mm_ = new QDoubleSpinBox(this);
@@ -394,7 +395,9 @@ void MergePanel::OnMerged(const MergedMesh& merged) {
                      .arg(mesh_->triangle_count())
                      .arg(mesh_->vertex_count())
                      .arg(merged.scans)
-                     .arg(merged.method == merge::MergeMethod::kTsdf ? "TSDF" : tr("maximum likelihood"))
+                     .arg(merged.method == merge::MergeMethod::kTsdf        ? tr("TSDF")
+                          : merged.method == merge::MergeMethod::kConsensus ? tr("consensus")
+                                                                            : tr("maximum likelihood"))
                      .arg(merged.voxel_m * 1000.0, 0, 'f', 1)
                      .arg(merged.seconds, 0, 'f', 1);
   if (merged.preview_cell_m > 0.0)

@@ -23,7 +23,72 @@ inline double FastErf(double x) {
 }  // namespace
 
 double CandidateRadius(const MergeOptions& options) {
-  return options.method == MergeMethod::kMaximumLikelihood ? options.Band() + 3.0 * options.sigma_m : options.Band();
+  switch (options.method) {
+    case MergeMethod::kMaximumLikelihood:
+      return options.Band() + 3.0 * options.sigma_m;
+    case MergeMethod::kConsensus:
+      return std::sqrt(options.Band() * options.Band() + options.voxel_m * options.voxel_m);
+    case MergeMethod::kTsdf:
+      break;
+  }
+  return options.Band();
+}
+
+bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                       const std::vector<int>& candidates, float* distance, float* weight) {
+  // The kernel along the surface: half a voxel, cut at one. Measured on a simulated street (5 cm voxels,
+  // RMS to the noise-free scene; the input points 9.95 mm): h = 1.5 voxels 11.0 mm, 1 9.0 mm, 0.7
+  // 7.9 mm, 0.5 7.0 mm (holes 14 % against 11 % at 1 voxel), 0.35 6.6 mm but a surface with more holes:
+  // wider kernels round edges and mix surfaces more than they average noise.
+  const float band = float(options.Band()), h = 0.5f * float(options.voxel_m);
+  const float sigma2 = float(options.sigma_m * options.sigma_m);
+  struct Vote {
+    Eigen::Vector3f to_x;  // x minus the patch's centre
+    Eigen::Vector3f normal;
+    double w;
+  };
+  thread_local std::vector<Vote> votes;
+  votes.clear();
+  float d_min = std::numeric_limits<float>::max();
+  Eigen::Vector3f nearest_normal = Eigen::Vector3f::Zero();
+  for (int id : candidates) {
+    const Patch& p = patches.patches[id];
+    const Eigen::Vector3f& a = patches.points[p.v[0]];
+    const Eigen::Vector3f& b = patches.points[p.v[1]];
+    const Eigen::Vector3f& c = patches.points[p.v[2]];
+    const Eigen::Vector3f closest = ClosestPointOnTriangle(x, a, b, c);
+    const float d = (closest - x).norm();
+    if (d < d_min) d_min = d, nearest_normal = p.normal;
+    const Eigen::Vector3f centre = (a + b + c) / 3.0f;
+    const Eigen::Vector3f to_x = x - centre;
+    const float s = to_x.dot(p.normal);  // > 0: x in front of the patch (its normal faces its scanner)
+    if (std::abs(s) > band) continue;
+    const float t2 = std::max(0.0f, to_x.squaredNorm() - s * s);  // along the surface, from its centre
+    if (t2 > 4.0f * h * h) continue;
+    // Range noise along the line of sight, seen along the normal: sigma cos(phi) (S's sigma').
+    const Eigen::Vector3f los = (centre - patches.scanner[p.scan]).normalized();
+    const float cos_phi = std::max(std::abs(los.dot(p.normal)), 0.2f);
+    votes.push_back({to_x, p.normal, std::exp(-double(t2) / (h * h)) / (sigma2 * cos_phi * cos_phi)});
+  }
+  // No measurement near, or none beside x along the surface: no surface invented here (a hole stays a hole).
+  if (d_min > band || votes.empty()) return false;
+  // The consensus normal of the surface nearest x (patches facing the other way - the far side of a
+  // thin wall - do not vote), then each patch's signed distance along it: one triangle's normal is
+  // as noisy as its three points, and x lies up to a voxel beside it.
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const Vote& v : votes)
+    if (v.normal.dot(nearest_normal) > 0.0f) normal += v.w * v.normal.cast<double>();
+  if (!(normal.norm() > 0.0)) return false;
+  const Eigen::Vector3f n = normal.normalized().cast<float>();
+  double sum = 0.0, sum_w = 0.0;
+  for (const Vote& v : votes) {
+    if (v.normal.dot(nearest_normal) <= 0.0f) continue;
+    sum += v.w * v.to_x.dot(n);
+    sum_w += v.w;
+  }
+  *distance = float(sum / sum_w);
+  *weight = float(sum_w);
+  return true;
 }
 
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
@@ -189,9 +254,10 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   if (Status s = options.Validate(); !s) return s.error();
   const double band = options.Band();
   const bool ml = options.method == MergeMethod::kMaximumLikelihood;
+  const bool consensus = options.method == MergeMethod::kConsensus;
   // TSDF projects into range images: the patch hash only for scans without one (and for ML).
   const bool unviewed = std::any_of(patches.views.begin(), patches.views.end(), [](const RangeView& v) { return v.empty(); });
-  const bool use_patches = ml || unviewed;
+  const bool use_patches = ml || consensus || unviewed;
   if (use_patches) patches.BuildHash(CandidateRadius(options));
   SparseGrid grid(patches.origin, options.voxel_m);
   if (bounds) grid.Restrict(*bounds);
@@ -208,7 +274,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   for (std::size_t s = 0; s + 1 < patches.scan_begin.size(); ++s) {
     for (std::size_t i = patches.scan_begin[s]; i < patches.scan_begin[s + 1]; ++i) {
       if ((i & 0xFFFFF) == 0 && cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
-      if (ml) {
+      if (ml || consensus) {
         grid.AllocateAround(patches.points[i], band);
         continue;
       }
@@ -231,7 +297,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
   const long n = long(grid.num_blocks());
   std::atomic<long> done{0};
   std::atomic<bool> cancelled{false};
-  const char* stage = ml ? "maximum-likelihood distance" : "TSDF";
+  const char* stage = ml ? "maximum-likelihood distance" : consensus ? "consensus distance" : "TSDF";
   constexpr int B = SparseGrid::kBlock, G = 4;
   static_assert(B % G == 0);
   const double radius = CandidateRadius(options);
@@ -268,6 +334,10 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
                   if (MaximumLikelihoodDistance(patches, p, options, candidates, &d)) {
                     b.distance[l] = d, b.weight[l] = 1.0f;
                   }
+                } else if (consensus) {
+                  patches.Filter(group, p, radius, &candidates);
+                  float w = 0.0f;
+                  if (ConsensusDistance(patches, p, options, candidates, &d, &w)) b.distance[l] = d, b.weight[l] = w;
                 } else {  // its bounding-sphere test is inside
                   const float w = TsdfDistance(patches, p, options, near, near_end, group, &d);
                   if (w > 0.0f) b.distance[l] = d, b.weight[l] = w;

@@ -26,7 +26,8 @@ Expected<SparseGrid> ComputeField(const std::vector<Scan>& scans, const MergeOpt
 Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& options, ProgressSink& progress,
                                   const CancelToken& cancel, const SparseGrid::Bounds* bounds = nullptr);
 
-// Radius within which a grid point's field depends on the patches: the band, plus 3 sigma for ML.
+// Radius within which a grid point's field depends on the patches: the band, plus 3 sigma for ML, the
+// band and a voxel along the surface for the consensus.
 double CandidateRadius(const MergeOptions& options);
 
 // S §3.3 for one grid point x (relative to the patches' origin): the maximum-likelihood distance
@@ -34,6 +35,15 @@ double CandidateRadius(const MergeOptions& options);
 // from RangePatches::Candidates; others in it are ignored. False when no patch lies within the band.
 bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
                                const std::vector<int>& candidates, float* distance);
+
+// The consensus distance at x (issue 35): every patch within a voxel of x along the surface and the
+// band across it votes with the signed distance of x from its centre along the consensus normal of
+// the surface nearest x, weighted by a Gaussian of half a voxel along the surface and by its noise
+// along the normal (sigma cos(phi)); patches facing away from the nearest one (the far side of a thin
+// wall) do not vote. False, and no surface there, when no patch lies within the band or none lies
+// within a voxel of x along the surface (a hole stays a hole). `weight`: the sum of the votes' weights.
+bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
+                       const std::vector<int>& candidates, float* distance, float* weight);
 
 // Curless–Levoy: the average over scans of the distance along each scanner's line of sight from x
 // to that scan's surface, truncated to the band. Scans with a range image count when they are in

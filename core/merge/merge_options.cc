@@ -5,7 +5,23 @@
 
 namespace scanreg::merge {
 
-const char* MergeMethodName(MergeMethod method) { return method == MergeMethod::kTsdf ? "tsdf" : "ml"; }
+const char* MergeMethodName(MergeMethod method) {
+  switch (method) {
+    case MergeMethod::kTsdf:
+      return "tsdf";
+    case MergeMethod::kConsensus:
+      return "consensus";
+    case MergeMethod::kMaximumLikelihood:
+      break;
+  }
+  return "ml";
+}
+
+std::optional<MergeMethod> ParseMergeMethod(const std::string& name) {
+  for (MergeMethod m : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus})
+    if (name == MergeMethodName(m)) return m;
+  return std::nullopt;
+}
 
 Status MergeOptions::Validate() const {
   auto bad = [](const std::string& what) { return Status(MakeError(ErrorCode::kInvalidArgument, what)); };

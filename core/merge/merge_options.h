@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <optional>
+#include <string>
 
 #include "core/common/expected.h"
 
@@ -11,9 +13,13 @@ namespace scanreg::merge {
 enum class MergeMethod {
   kMaximumLikelihood,  // S §2.3 / §3.3: maximum-likelihood distance histogram, sign by weighted vote
   kTsdf,               // Curless & Levoy 1996: weighted truncated signed distance averaging (baseline)
+  kConsensus,          // the measurements near a grid point vote with their signed plane distances, weighted by
+                       // their line-of-sight noise and a kernel of one voxel along the surface (sub-voxel consensus)
 };
 
 const char* MergeMethodName(MergeMethod method);
+// "ml", "tsdf" or "consensus" (MergeMethodName's names); nothing for any other text.
+std::optional<MergeMethod> ParseMergeMethod(const std::string& name);
 
 struct MergeOptions {
   double voxel_m = 0.02;           // metres: edge of a voxel (S's grid interval, §4.1: 0.02)
@@ -22,7 +28,9 @@ struct MergeOptions {
   // box's edges) and closer on the real Stanford bunny (0.24 vs 0.36 mm input-to-surface); TSDF is
   // closer on smooth shapes (sphere 2.6 vs 6.0 mm, plane 5.7 vs 13.1 mm; S's two-plane model
   // 0.012 vs 0.019) and ~25x faster, so large street projects merge with --method tsdf.
-  MergeMethod method = MergeMethod::kMaximumLikelihood;
+  // The consensus is the default: on a simulated street (5 cm voxels) 7.0 mm RMS from the noise-free
+  // scene against the input points' 10.0, ML's 15.2 and TSDF's 15.8 (scanreg-bench --section merge).
+  MergeMethod method = MergeMethod::kConsensus;
   double sigma_m = 0.012;          // metres: range noise along the line of sight (S §3.1; W's scanner 12 mm)
   double band_m = 0.0;             // metres: field evaluated within this distance of the data; 0 = 3 voxels
   double bin_m = 0.0;              // metres: ML histogram bin width (S §3.3, a user setting); 0 = sigma / 4

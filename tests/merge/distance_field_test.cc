@@ -67,6 +67,8 @@ TEST_P(GroupedField, EqualsPerPointEvaluation) {
       float d = 0.0f, w = 0.0f;
       if (GetParam() == MergeMethod::kMaximumLikelihood) {
         w = MaximumLikelihoodDistance(*patches, p, options, candidates, &d) ? 1.0f : 0.0f;
+      } else if (GetParam() == MergeMethod::kConsensus) {
+        if (!ConsensusDistance(*patches, p, options, candidates, &d, &w)) w = 0.0f;
       } else {
         w = TsdfDistance(*patches, p, options, near.data(), near.data() + near.size(), candidates, &d);
       }
@@ -91,7 +93,8 @@ TEST_P(GroupedField, EqualsPerPointEvaluation) {
   EXPECT_LT(sign_flips, known / 200) << sign_flips << " of " << known;
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, GroupedField, ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf));
+INSTANTIATE_TEST_SUITE_P(Methods, GroupedField,
+                         ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus));
 
 }  // namespace
 }  // namespace scanreg::merge

@@ -113,7 +113,7 @@ TEST_P(SphereMerge, WatertightAndBelowInputNoise) {
   std::printf("%s sphere: %zu triangles, RMS %.4f m (input sigma %.3f)\n", MergeMethodName(GetParam()),
               mesh.triangles.size(), rms, sigma);
   // S §4.1.2 keeps 66 % of the input noise with ML; averaging does better on smooth shapes.
-  EXPECT_LT(rms, (GetParam() == MergeMethod::kTsdf ? 0.5 : 0.75) * sigma);
+  EXPECT_LT(rms, (GetParam() == MergeMethod::kMaximumLikelihood ? 0.75 : 0.5) * sigma);
   // Triangles wound counter-clockwise from outside: normals point away from the centre.
   int outward = 0;
   for (const auto& t : mesh.triangles) {
@@ -163,13 +163,14 @@ TEST_P(SphereMerge, TiledIsTheSameSurfaceWithoutSeams) {
   EXPECT_EQ(std::adjacent_find(vb.begin(), vb.end()), vb.end()) << "a vertex twice: a seam between tiles";
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, SphereMerge, ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf));
+INSTANTIATE_TEST_SUITE_P(Methods, SphereMerge,
+                         ::testing::Values(MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus));
 
 TEST(MergeField, SignsInsideAndOutsideSphere) {
   const Eigen::Vector3d c(0.0, 0.0, 0.0);
   const double r = 0.5, sigma = 0.01;
   const auto scans = SphereScans(c, r, sigma);
-  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
+  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus}) {
     MergeOptions options;
     options.voxel_m = 0.025;
     options.sigma_m = sigma;
@@ -238,7 +239,7 @@ TEST(MergeScans, BoxFromSimulatorIsWatertight) {
       scans.push_back(std::move(*scan));
     }
   }
-  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
+  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus}) {
     MergeOptions options;
     options.voxel_m = 0.03;
     options.sigma_m = so.range_noise_m;
@@ -280,7 +281,7 @@ TEST(MergeScans, PlaneFromSeveralViewsBelowNoise) {
     const Eigen::Vector3d eye(0.0, -1.0 + 0.5 * i, 0.3 * (i % 2));
     scans.push_back(MakeWindowScan(wall, eye, Eigen::Vector3d(2, 0, 0), 80, 80, 0.6, sigma, 40 + i, "w"));
   }
-  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf}) {
+  for (MergeMethod method : {MergeMethod::kMaximumLikelihood, MergeMethod::kTsdf, MergeMethod::kConsensus}) {
     MergeOptions options;
     options.voxel_m = 0.02;
     options.sigma_m = sigma;
