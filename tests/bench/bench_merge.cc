@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -242,6 +243,49 @@ void Bunny(Table& table, bool quick) {
   }
 }
 
+// The real pump TLS scan (libE57 test data, 155 k points at 2-5 m) at 1 cm, every method (issue 35):
+// the share of the vertices within 2 cm of a scan point - surface nobody measured lies farther.
+void Pump(Table& table) {
+  const char* env = std::getenv("SCANREG_REALDATA");
+  const std::filesystem::path root = env ? std::filesystem::path(env) : std::filesystem::path(SCANREG_BENCH_REALDATA);
+  NullProgress progress;
+  CancelToken cancel;
+  auto read = io::ReadScanFile(root / "e57_pumpA_tls" / "pumpA.ptx", progress, cancel);
+  if (!read || read->empty())
+    return table.Add({"merge", "pump", 0.0, "", "skipped: " + (read ? std::string("empty") : read.error().ToString())});
+  std::vector<Scan> scans = {std::move((*read)[0])};
+  pcl::PointCloud<pcl::PointXYZ>::Ptr points(new pcl::PointCloud<pcl::PointXYZ>);
+  for (std::size_t k = 0; k < scans[0].size(); ++k)
+    if (scans[0].valid[k]) points->push_back(pcl::PointXYZ(scans[0].points[k].x(), scans[0].points[k].y(), scans[0].points[k].z()));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(points);
+  for (merge::MergeMethod method : {merge::MergeMethod::kConsensus, merge::MergeMethod::kMaximumLikelihood, merge::MergeMethod::kTsdf}) {
+    merge::MergeOptions options;
+    options.voxel_m = 0.01;
+    options.method = method;
+    Expected<merge::MergeResult> result = MakeError(ErrorCode::kFailed, "not run");
+    const double seconds = Seconds([&] { result = merge::MergeScanSet(scans, options, progress, cancel); });
+    const std::string what = std::string("real pump scan, 1 cm (") + merge::MergeMethodName(method) + ")";
+    if (!result) {
+      table.Add({"merge", what, 0.0, "", "failed: " + result.error().ToString()});
+      continue;
+    }
+    std::vector<int> idx(1);
+    std::vector<float> d2(1);
+    std::vector<float> distances;
+    for (const Eigen::Vector3f& v : result->mesh.vertices) {
+      const Eigen::Vector3d w = result->mesh.origin + v.cast<double>();
+      if (tree.nearestKSearch(pcl::PointXYZ(float(w.x()), float(w.y()), float(w.z())), 1, idx, d2) > 0)
+        distances.push_back(std::sqrt(d2[0]));
+    }
+    const std::size_t near = std::count_if(distances.begin(), distances.end(), [](float d) { return d <= 0.02f; });
+    std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+    table.Add({"merge", what + ": vertices within 2 cm of a scan point", 100.0 * near / std::max<std::size_t>(distances.size(), 1), "%",
+               Fmt("median %.1f mm; %.0f vertices; ", distances.empty() ? 0.0 : 1e3 * distances[distances.size() / 2],
+                   double(distances.size())) + Fmt("%.1f s", seconds)});
+  }
+}
+
 SimulatedProjectOptions StreetProject(int stations, int cols, int rows) {
   SimulatedProjectOptions po;
   po.stations = stations;
@@ -477,6 +521,7 @@ void RunMergeBench(Table& table, bool quick) {
   RunMarchingCubesComparison(table, quick);
   TwoPlaneModel(table, quick);
   Bunny(table, quick);
+  Pump(table);
   Street(table, quick);
 }
 
