@@ -17,7 +17,6 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include <Eigen/Eigenvalues>
 #include <limits>
 
 #include "core/io/pose_file.h"
@@ -30,6 +29,7 @@
 #include "core/simulate/project_sim.h"
 #include "tests/bench/bench_table.h"
 #include "tests/merge/merge_test_util.h"
+#include "tests/merge/truth_surface.h"
 
 namespace scanreg::bench {
 
@@ -294,81 +294,6 @@ SimulatedProjectOptions StreetProject(int stations, int cols, int rows) {
   return po;
 }
 
-// The noise-free surface of a simulated project (the same stations with every noise source off):
-// the distance of a point to it is the distance to the plane fitted to its 12 nearest noise-free
-// points (their nearest, when that lies farther than 0.3 m: no true surface there).
-class TruthSurface {
- public:
-  explicit TruthSurface(const std::vector<Scan>& truth, double max_range_m) : cloud_(new pcl::PointCloud<pcl::PointXYZ>) {
-    for (const Scan& s : truth)
-      for (std::size_t k = 0; k < s.size(); ++k) {
-        if (!s.valid[k] || s.points[k].norm() > max_range_m) continue;
-        const Eigen::Vector3d w = *s.reference_world_from_scan * s.points[k].cast<double>();
-        cloud_->push_back(pcl::PointXYZ(float(w.x()), float(w.y()), float(w.z())));
-      }
-    tree_.setInputCloud(cloud_);
-  }
-
-  double Distance(const Eigen::Vector3d& p) const {
-    std::vector<int> idx(12);
-    std::vector<float> d2(12);
-    const int found = tree_.nearestKSearch(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())), 12, idx, d2);
-    if (found < 3) return std::numeric_limits<double>::infinity();
-    if (d2[0] > 0.09f) return std::sqrt(double(d2[0]));
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int i = 0; i < found; ++i) mean += (*cloud_)[idx[i]].getVector3fMap().cast<double>();
-    mean /= found;
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int i = 0; i < found; ++i) {
-      const Eigen::Vector3d q = (*cloud_)[idx[i]].getVector3fMap().cast<double>() - mean;
-      cov += q * q.transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-    return std::abs((p - mean).dot(es.eigenvectors().col(0)));
-  }
-
-  // The share of the true surface (every 10th noise-free point) with no vertex within `radius`.
-  double Holes(const std::vector<Eigen::Vector3d>& vertices, double radius) const {
-    pcl::PointCloud<pcl::PointXYZ>::Ptr v(new pcl::PointCloud<pcl::PointXYZ>);
-    for (const Eigen::Vector3d& p : vertices) v->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
-    if (v->empty()) return 1.0;
-    pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-    tree.setInputCloud(v);
-    std::vector<int> idx(1);
-    std::vector<float> d2(1);
-    std::size_t tested = 0, holes = 0;
-    for (std::size_t k = 0; k < cloud_->size(); k += 10, ++tested)
-      holes += tree.nearestKSearch((*cloud_)[k], 1, idx, d2) < 1 || d2[0] > radius * radius;
-    return double(holes) / std::max<std::size_t>(tested, 1);
-  }
-
- private:
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud_;
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree_;
-};
-
-struct Accuracy {
-  double rms_m = 0.0;       // over the points within 10 cm of the truth
-  double spurious = 0.0;    // share farther than 10 cm
-};
-
-Accuracy Measure(const TruthSurface& truth, const std::vector<Eigen::Vector3d>& points) {
-  Accuracy a;
-  std::size_t near = 0, far = 0;
-  double s2 = 0.0;
-  for (const Eigen::Vector3d& p : points) {
-    const double d = truth.Distance(p);
-    if (d > 0.1) {
-      ++far;
-      continue;
-    }
-    s2 += d * d, ++near;
-  }
-  a.rms_m = std::sqrt(s2 / std::max<std::size_t>(near, 1));
-  a.spurious = double(far) / std::max<std::size_t>(near + far, 1);
-  return a;
-}
-
 // One simulated street project merged with each method (returns within 25 m of their scanner, as
 // the README demo merges).
 void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
@@ -389,14 +314,14 @@ void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
   noise_free.scanner.range_noise_m = noise_free.scanner.range_noise_per_m = noise_free.scanner.angle_noise_deg = 0.0;
   auto truth_scans = SimulateProject(noise_free, progress, cancel);
   if (!truth_scans) return table.Add({"merge", "street truth", 0.0, "", "failed: " + truth_scans.error().ToString()});
-  const TruthSurface truth(*truth_scans, 25.0);
+  const test::TruthSurface truth(*truth_scans, 25.0);
   truth_scans->clear();
   {
     std::vector<Eigen::Vector3d> input;
     for (const Scan& s : *scans)
       for (std::size_t k = 0; k < s.size(); k += 5)
         if (s.valid[k] && s.points[k].norm() <= 25.0f) input.push_back(s.world_from_scan * s.points[k].cast<double>());
-    const Accuracy a = Measure(truth, input);
+    const test::Accuracy a = test::Measure(truth, input);
     table.Add({"merge", "street " + size + ": input points to the noise-free scene", 1e3 * a.rms_m, "mm RMS",
                Fmt("every 5th point within 25 m; %.2f %% farther than 10 cm", 100 * a.spurious)});
   }
@@ -426,7 +351,7 @@ void StreetRun(Table& table, int stations, int cols, int rows, double voxel,
                Fmt("field %.0f MiB; the simulated scans in memory included", result->field_bytes / 1048576.0)});
     std::vector<Eigen::Vector3d> vertices;
     for (const Eigen::Vector3f& v : result->mesh.vertices) vertices.push_back(result->mesh.origin + v.cast<double>());
-    const Accuracy a = Measure(truth, vertices);
+    const test::Accuracy a = test::Measure(truth, vertices);
     table.Add({"merge", what + ": vertices to the noise-free scene", 1e3 * a.rms_m, "mm RMS",
                Fmt("%.2f %% of the vertices farther than 10 cm (spurious); holes: ", 100 * a.spurious) +
                    Fmt("%.1f %% of the true surface has no vertex within one voxel", 100 * truth.Holes(vertices, voxel))});
