@@ -24,11 +24,11 @@ Expected<std::vector<std::vector<std::uint32_t>>> MovingPointCells(const merge::
     const Eigen::Vector3d at = poses[i].translation();
     auto distance = [&](int j) { return (poses[j].translation() - at).norm(); };
     std::stable_sort(others.begin(), others.end(), [&](int a, int b) { return distance(a) < distance(b); });
-    int observed = 0;  // the nearest observers with a panoramic grid
+    int observed = 0;  // the nearest observers that see free space (HasViewpoint)
     for (std::size_t k = 0; k < others.size() && observed < options.observers; ++k) {
       auto observer = scans.get(others[k]);
       if (!observer) return observer.error();
-      if ((*observer)->angles.empty()) continue;
+      if (!HasViewpoint(**observer)) continue;
       ++observed;
       const Eigen::Isometry3d observer_from_scan = (*observer)->world_from_scan.inverse() * (*scan)->world_from_scan;
       MarkFreeSpacePoints(**observer, **scan, observer_from_scan, options.margin_m, &mask);

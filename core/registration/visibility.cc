@@ -37,6 +37,8 @@ class GridProjector {
   }
 
   bool known() const { return kind_ != Kind::kNone; }
+  // The columns close a full circle (a panorama's last column neighbours its first).
+  bool wraps() const { return kind_ == Kind::kPanoramic && wraps_; }
 
   bool Project(const Eigen::Vector3d& p, int* row, int* col) const {
     if (kind_ == Kind::kPerspective) return ProjectPerspective(p, row, col);
@@ -129,8 +131,9 @@ bool NearestAround(const Scan& observer, const GridProjector& projector, const E
   for (int dr = -1; dr <= 1; ++dr) {
     for (int dc = -1; dc <= 1; ++dc) {
       const int r = row + dr;
-      const int c = (col + dc + observer.cols) % observer.cols;
-      if (r < 0 || r >= observer.rows || !observer.IsValid(r, c)) continue;
+      int c = col + dc;
+      if (projector.wraps()) c = (c + observer.cols) % observer.cols;
+      if (r < 0 || r >= observer.rows || c < 0 || c >= observer.cols || !observer.IsValid(r, c)) continue;
       best = std::min(best, double(observer.Point(r, c).norm()));
     }
   }
@@ -282,6 +285,8 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   if (result.moving_fraction() > options.max_moving) result.moving = 0;  // not traffic: everything moved
   return result;
 }
+
+bool HasViewpoint(const Scan& observer) { return GridProjector(observer).known(); }
 
 PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isometry3d& a_from_b,
                                  const FreeSpaceOptions& options) {

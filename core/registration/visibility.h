@@ -54,11 +54,14 @@ struct FreeSpaceResult {
 // Samples `other`'s valid points (a regular sub-grid of an organized scan, evenly spaced indices
 // otherwise), maps them into the observer's frame and its grid: panoramic (observer.angles) or
 // perspective (a depth camera's pixel grid, fitted to the observer's own points); returns
-// tested = 0 for a grid that is neither (no viewpoint to see free space from). A sample is a violation when even the nearest return in the
-// 3x3 cells around its projection is farther than the sample's range + margin (the 3x3 minimum
-// spares depth edges and mixed pixels).
+// tested = 0 for a grid that is neither (no viewpoint to see free space from: HasViewpoint). A
+// sample is a violation when even the nearest return in the 3x3 cells around its projection is
+// farther than the sample's range + margin (the 3x3 minimum spares depth edges and mixed pixels).
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
                                     const FreeSpaceOptions& options);
+
+// True when free space can be seen from the observer's grid (panoramic or perspective).
+bool HasViewpoint(const Scan& observer);
 
 // Both directions of a pair at a pose: a's free space against b's samples and the reverse.
 struct PairFreeSpace {
