@@ -12,7 +12,7 @@ namespace scanreg::cli {
 
 int RunConvert(const std::vector<std::string>& argv) {
   int code = 0;
-  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .e57, .ply, .pcd)", argv,
+  auto args = ParseOrHelp("convert", "IN OUT   (formats by extension: .ptx, .e57, .ply, .pcd; IN also .las)", argv,
                           {{"scan", true, true, "NAME     .e57 input: convert only this scan (repeatable)"}}, &code);
   if (!args) return code;
   if (args->positional().size() != 2) {

@@ -204,7 +204,7 @@ void MainWindow::CreateDocks() {
 void MainWindow::CreateMenus() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   file->setObjectName("FileMenu");
-  // "*.ptx *.e57 *.ply *.pcd" from io::SupportedScanExtensions() (".ptx, .e57, .ply, .pcd").
+  // "*.ptx *.e57 *.ply *.pcd *.las" from io::SupportedScanExtensions() (".ptx, .e57, .ply, .pcd, .las").
   const QString scan_filter =
       tr("Scans (%1);;All files (*)").arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
   QAction* create = file->addAction(tr("&New project…"), this, [this, scan_filter] {

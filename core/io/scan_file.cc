@@ -2,6 +2,7 @@
 
 #include "core/io/e57_reader.h"
 #include "core/io/e57_writer.h"
+#include "core/io/las_reader.h"
 #include "core/io/pcd.h"
 #include "core/io/ply.h"
 #include "core/io/ptx.h"
@@ -9,7 +10,7 @@
 
 namespace scanreg::io {
 
-const char* SupportedScanExtensions() { return ".ptx, .e57, .ply, .pcd"; }
+const char* SupportedScanExtensions() { return ".ptx, .e57, .ply, .pcd, .las"; }
 
 namespace {
 
@@ -32,7 +33,8 @@ Expected<std::vector<Scan>> One(Expected<Scan> scan) {
 Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, ProgressSink& progress,
                                          const CancelToken& cancel) {
   const std::string ext = LowerExtension(path);
-  if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
+  if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd" && ext != ".las" && ext != ".laz")
+    return UnknownExtension(path);
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     return MakeError(ErrorCode::kNotFound, path.string() + ": no such file; check the path");
@@ -40,12 +42,17 @@ Expected<std::vector<Scan>> ReadScanFile(const std::filesystem::path& path, Prog
   if (ext == ".ptx") return ReadPtx(path, progress, cancel);
   if (ext == ".e57") return ReadE57(path, E57ReadOptions{}, progress, cancel);
   if (ext == ".ply") return One(ReadPly(path, progress, cancel));
+  if (ext == ".las" || ext == ".laz") return One(ReadLas(path, progress, cancel));
   return One(ReadPcd(path, progress, cancel));
 }
 
 Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
                      const CancelToken& cancel) {
   const std::string ext = LowerExtension(path);
+  if (ext == ".las") {
+    return MakeError(ErrorCode::kUnsupported, path.string() + ": LAS files are written by the export "
+                                                              "(scanreg-cli export-clouds PROJECT --out DIR --format las)");
+  }
   if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
   if (ext == ".ptx") return WritePtx(path, scans, progress, cancel);
   if (ext == ".e57") return WriteE57(path, scans, progress, cancel);

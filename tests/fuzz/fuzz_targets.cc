@@ -7,6 +7,8 @@
 #include "core/features/feature_cache.h"
 #include "core/io/e57_reader.h"
 #include "core/io/e57_writer.h"
+#include "core/io/las_reader.h"
+#include "core/io/las_writer.h"
 #include "core/io/pcd.h"
 #include "core/io/ply.h"
 #include "core/io/pose_csv.h"
@@ -140,6 +142,22 @@ std::vector<FuzzTarget> MakeTargets(const fs::path& work_dir) {
     return Judge(io::ReadPcd(f, progress, CancelToken()), ok, [](const Scan& s) { return CheckScans({s}); });
   };
   targets.push_back(pcd);
+
+  FuzzTarget las{"las", ".las", {}, nullptr};  // LAS 1.4 format 6, as our export writes it
+  las.seeds.push_back(written("a.las", [&](const fs::path& p) {
+    io::LasCloud cloud;
+    for (std::size_t i = 0; i < scans[0].size(); ++i) {
+      if (!scans[0].valid[i]) continue;
+      cloud.points.push_back(scans[0].world_from_scan * scans[0].points[i].cast<double>());
+      cloud.reflectance.push_back(scans[0].reflectance[i]);
+    }
+    return io::WriteLas(p, cloud);
+  }));
+  las.read = [](const fs::path& f, bool* ok) {
+    NullProgress progress;
+    return Judge(io::ReadLas(f, progress, CancelToken()), ok, [](const Scan& s) { return CheckScans({s}); });
+  };
+  targets.push_back(las);
 
   FuzzTarget project{"project", ".scanreg.json", {}, nullptr};
   {
