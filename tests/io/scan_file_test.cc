@@ -34,11 +34,11 @@ TEST(ScanFile, ClearErrors) {
   TempDir dir;
   NullProgress progress;
   CancelToken cancel;
-  test::WriteBytes(dir / "scan.las", "x");
-  Expected<std::vector<Scan>> r = ReadScanFile(dir / "scan.las", progress, cancel);
+  test::WriteBytes(dir / "scan.xyz", "x");
+  Expected<std::vector<Scan>> r = ReadScanFile(dir / "scan.xyz", progress, cancel);
   ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("'.las'"), std::string::npos) << r.error().message;
-  EXPECT_NE(r.error().message.find(".ptx, .e57, .ply, .pcd"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find("'.xyz'"), std::string::npos) << r.error().message;
+  EXPECT_NE(r.error().message.find(".ptx, .e57, .ply, .pcd, .las"), std::string::npos) << r.error().message;
 
   r = ReadScanFile(dir / "missing.ptx", progress, cancel);
   ASSERT_FALSE(r.ok());
