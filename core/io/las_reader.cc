@@ -143,6 +143,10 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
       const Eigen::Vector3d raw(Get<std::int32_t>(buffer, at), Get<std::int32_t>(buffer, at + 4),
                                 Get<std::int32_t>(buffer, at + 8));
       out.xyz[first + k] = raw.cwiseProduct(out.scale) + out.offset;
+      if (!out.xyz[first + k].allFinite()) {
+        return bad("point " + std::to_string(first + k) + " is not a finite number after scale and offset; the "
+                   "header's scale factors are damaged");
+      }
       out.intensity[first + k] = Get<std::uint16_t>(buffer, at + 12);
     }
     progress.Report(double(first + n) / double(count), stage);

@@ -250,6 +250,10 @@ TEST(LasReader, DamagedFilesAreClearErrorsNamingTheFileAndWhatToDo) {
   std::string scale = good;
   std::memset(&scale[131], 0, 8);
   cases.push_back({"scale.las", scale, "scale factor"});
+  std::string overflow = good;
+  const double huge_scale = 1e308;
+  std::memcpy(&overflow[131], &huge_scale, 8);
+  cases.push_back({"overflow.las", overflow, "not a finite number"});
   std::string header = good;
   header[94] = static_cast<char>(200);
   header[95] = 0;
