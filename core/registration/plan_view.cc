@@ -107,9 +107,13 @@ std::vector<PlanHypothesis> PlanHypotheses(const PlanView& parent, const PlanVie
   const double cell = std::max(parent.cell_m, 4.0 * reach / kMaxMapCells);
   const int half = static_cast<int>(std::ceil(reach / cell));
   const int size = cv::getOptimalDFTSize(4 * half);
+  // Real-input transforms in OpenCV's packed (CCS) layout, told that only the rows a map can fill
+  // are non-zero (its cells and the blur's one-cell spill): the same correlation as with complex
+  // transforms of the whole square, for under half the work (issue 36).
+  const int filled = std::min(size, 2 * half + 1);
   const cv::Mat pmap = WallMap(parent.wall_xy, cell, half, size);
   cv::Mat pspec;
-  cv::dft(pmap, pspec, cv::DFT_COMPLEX_OUTPUT);
+  cv::dft(pmap, pspec, 0, filled);
   const double pnorm = cv::norm(pmap);
   const std::vector<int> peaks =
       HeadingPeaks(HeadingHistogram(parent.wall_azimuth), HeadingHistogram(child.wall_azimuth), options.max_headings);
@@ -123,7 +127,7 @@ std::vector<PlanHypothesis> PlanHypotheses(const PlanView& parent, const PlanVie
       for (const Eigen::Vector2d& q : child.wall_xy) rotated.push_back(rot * q);
       const cv::Mat cmap = WallMap(rotated, cell, half, size);
       cv::Mat cspec, prod, corr;
-      cv::dft(cmap, cspec, cv::DFT_COMPLEX_OUTPUT);
+      cv::dft(cmap, cspec, 0, filled);
       cv::mulSpectrums(pspec, cspec, prod, 0, /*conjB=*/true);
       cv::idft(prod, corr, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
       cv::Point at;
