@@ -80,7 +80,11 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
     return bad("the header says it is " + std::to_string(header_size) + " bytes, but a LAS 1." +
                std::to_string(out.version_minor) + " header has at least " + std::to_string(needed_header));
   }
-  if (static_cast<std::uintmax_t>(header_size) > file_size || point_offset < static_cast<std::uint32_t>(header_size)) {
+  if (static_cast<std::uintmax_t>(header_size) > file_size) {
+    return bad("the header says it is " + std::to_string(header_size) + " bytes, more than the whole file (" +
+               std::to_string(file_size) + " bytes): truncated");
+  }
+  if (point_offset < static_cast<std::uint32_t>(header_size)) {
     return bad("the offset to the point data (" + std::to_string(point_offset) + ") lies inside the " +
                std::to_string(header_size) + "-byte header; the header is damaged");
   }
@@ -127,12 +131,13 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
   out.xyz.resize(count);
   out.intensity.resize(count);
   in.seekg(point_offset);
-  constexpr std::uint64_t kChunk = 65536;
+  // Read in chunks of at most 16 MB whatever the record length (up to 64 KB a record).
+  const std::uint64_t chunk = std::max<std::uint64_t>(1, (16u << 20) / static_cast<std::uint64_t>(out.record_length));
   std::vector<char> buffer;
   const std::string stage = "reading " + path.filename().string();
-  for (std::uint64_t first = 0; first < count; first += kChunk) {
+  for (std::uint64_t first = 0; first < count; first += chunk) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, name + ": cancelled");
-    const std::uint64_t n = std::min(kChunk, count - first);
+    const std::uint64_t n = std::min(chunk, count - first);
     buffer.resize(n * out.record_length);
     in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
     if (!in) {
