@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <new>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -121,15 +123,31 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
     return bad("the point data should start at byte " + std::to_string(point_offset) + ", beyond the end of the " +
                std::to_string(file_size) + "-byte file: truncated");
   }
-  const std::uint64_t room = (file_size - point_offset) / static_cast<std::uint64_t>(out.record_length);
+  // The point records end where extended VLRs (1.4) or internal waveform data (1.3+) begin.
+  std::uint64_t end = file_size;
+  if (out.version_minor >= 3) {
+    const std::uint64_t waveform = Get<std::uint64_t>(h, 227);
+    if (waveform > point_offset && waveform < end) end = waveform;
+  }
+  if (out.version_minor >= 4) {
+    const std::uint64_t evlr = Get<std::uint64_t>(h, 235);
+    if (evlr > point_offset && evlr < end) end = evlr;
+  }
+  const std::uint64_t room = (end - point_offset) / static_cast<std::uint64_t>(out.record_length);
   if (count > room) {
     return bad("the header promises " + std::to_string(count) + " points, but the file holds only " +
                std::to_string(room) + " complete " + std::to_string(out.record_length) +
                "-byte records: truncated (copy it again)");
   }
 
-  out.xyz.resize(count);
-  out.intensity.resize(count);
+  try {
+    out.xyz.resize(count);
+    out.intensity.resize(count);
+  } catch (const std::bad_alloc&) {
+    return MakeError(ErrorCode::kIoError, name + ": " + std::to_string(count) +
+                                              " points do not fit in memory; split the file (e.g. with las2las or pdal "
+                                              "split) and import the parts");
+  }
   in.seekg(point_offset);
   // Read in chunks of at most 16 MB whatever the record length (up to 64 KB a record).
   const std::uint64_t chunk = std::max<std::uint64_t>(1, (16u << 20) / static_cast<std::uint64_t>(out.record_length));

