@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <new>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 
 #include "core/io/organize_default.h"
+#include "core/io/text_parse.h"
 
 namespace scanreg::io {
 namespace {
@@ -48,9 +48,7 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
   if (ec) return MakeError(ErrorCode::kIoError, name + ": cannot read the file size: " + ec.message());
   std::ifstream in(path, std::ios::binary);
   if (!in) return MakeError(ErrorCode::kIoError, name + ": cannot open the file; check that it exists and is readable");
-  std::string lower = path.extension().string();
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (lower == ".laz") {
+  if (LowerExtension(path) == ".laz") {
     return MakeError(ErrorCode::kUnsupported, name + ": a LAZ (compressed LAS) file; decompress it first, e.g. "
                                                      "`laszip -i FILE.laz -o FILE.las` or `pdal translate FILE.laz FILE.las`");
   }
