@@ -257,6 +257,10 @@ int RunRegister(const std::vector<std::string>& argv) {
         "max(8 x noise, 2 x point spacing, extent / 100); with --coarse none also how far apart the "
         "current poses are)"},
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
+       {"coarse-scale", true, false,
+        "X        also FPFH descriptors at X times the voxel, matched scale with scale: stations far apart "
+        "(a busy street 12 m apart: 6 of 6 scans instead of 2) — but in repetitive interiors they also "
+        "support a corridor turned 180° (default 0: the fine scale only; 3 for wide spacing outdoors)"},
        {"noise", true, false, "METRES   scanner range noise sigma (default: from the data, the scans' local plane residuals)"},
        {"no-cache", false, false, "       do not read or write the feature cache"},
        {"global", false, false,

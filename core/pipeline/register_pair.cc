@@ -135,7 +135,8 @@ int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const
     const Eigen::Isometry3d lp = parent.geometric.Levelling(), lc = child.geometric.Levelling();
     std::vector<Correspondence3d> corr;
     for (const GeometricMatch& g : geometric)
-      corr.push_back({lp * parent.geometric.points[g.parent], lc * child.geometric.points[g.child]});
+      corr.push_back({lp * parent.geometric.points[g.parent], lc * child.geometric.points[g.child],
+                      1.5 * parent.geometric.VoxelOf(g.parent)});
     CoarseOptions o = options.coarse;
     o.method = CoarseMethod::k3d;
     o.levelled = levelled;
@@ -271,10 +272,10 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     match_of_corr.push_back(static_cast<int>(&m - matches.data()));
   }
   const int n_sift = static_cast<int>(corr.size());
-  // FPFH samples are voxel centroids: they sit up to about a voxel from their partner.
-  const double geometric_threshold = 1.5 * parent.geometric.voxel_m;
+  // FPFH samples are voxel centroids: they sit up to about a voxel (of their scale) from their partner.
   for (const GeometricMatch& g : geometric)
-    corr.push_back({parent.geometric.points[g.parent], child.geometric.points[g.child], geometric_threshold});
+    corr.push_back({parent.geometric.points[g.parent], child.geometric.points[g.child],
+                    1.5 * parent.geometric.VoxelOf(g.parent)});
   link.reliable = static_cast<int>(corr.size());
   const bool plan_views = parent.plan.usable && child.plan.usable;
   if (corr.empty() && !plan_views) return fail("no reliable correspondence: the scans share no matched features");
@@ -385,9 +386,11 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.rms_m = best.evidence.rms_m;
   link.conflict = best.evidence.conflict;
   link.moving = best.evidence.moving;
-  link.consistent =
-      static_cast<int>(ConsistentIndices(sift_corr, best.parent_from_child, threshold, angular).size() +
-                       ConsistentIndices(geometric_corr, best.parent_from_child, geometric_threshold).size());
+  const std::vector<int> geometric_consistent = ConsistentIndices(geometric_corr, best.parent_from_child, threshold);
+  link.consistent = static_cast<int>(ConsistentIndices(sift_corr, best.parent_from_child, threshold, angular).size() +
+                                     geometric_consistent.size());  // FPFH: their own tolerances
+  int coarse_consistent = 0;  // of them, coarse-scale FPFH (GeometricOptions::coarse_scale)
+  for (int k : geometric_consistent) coarse_consistent += geometric[k].child >= child.geometric.FinestEnd();
   // The best distinct competitor. Ambiguous only when both poses fit well; when neither does, the
   // evidence below fails the link.
   const Hypothesis* rival = nullptr;
@@ -417,9 +420,20 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     // evidence for it: a weak link with static conflicts places a scan only when a loop through
     // other scans confirms it (issue 38: a room fits another room turned 180° with 9-12 consistent
     // correspondences, 84 % overlap and 4.2-4.8 % conflict — the furniture that differs).
+    // The same for a weak pose that rests on coarse-scale features with object-sized conflicts beyond
+    // what would fail a link if they were static (issue 37): the cars and posts of a symmetric street
+    // turned 180° (measured: 12 consistent coarse-scale correspondences, 1.0 % static and 24.6 %
+    // object-sized conflict, 25 m off). Fine-scale support keeps its traffic (5 m spacing, 8
+    // vehicles: ~10 % at the true poses).
+    const bool coarse_supported = link.consistent - coarse_consistent < coarse->required_inliers;
     if (link.status == io::LinkStatus::kWeak && link.conflict > options.thresholds.weak_conflict) {
       link.reason += Format("; %.1f %% of the points lie in the other scanner's free space; a loop confirms it",
                             100 * link.conflict);
+      result.needs_loop_if_checkable = true;
+    } else if (link.status == io::LinkStatus::kWeak && coarse_supported && link.moving > options.thresholds.max_conflict) {
+      link.reason += Format("; %.1f %% of the points lie in the other scanner's free space on object-sized "
+                            "clusters (traffic, or a wrong pose); a loop confirms it",
+                            100 * link.moving);
       result.needs_loop_if_checkable = true;
     }
     return finish();

@@ -77,6 +77,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.features", "features", "correspondences", Names(AllFeatureSources(), FeatureSourcesName)},
       {"register.fine", "fine", "fine method", Names(AllFineMethods(), FineMethodName)},
       {"register.ratio", "ratio", "descriptor ratio t_des", {}},
+      {"register.coarse_scale", "coarse-scale", "coarse FPFH scale (x the voxel; 0: fine scale only)", {}},
       {"register.noise_m", "noise", "range noise (m; 0: from the data)", {}},
       {"register.overlap_distance_m", "overlap-distance", "overlap distance (m; 0: from the data)", {}},
       {"register.global", "global", "global registration", {}, true},
@@ -98,6 +99,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.fine") return FineMethodName(o.fine);
   if (key == "register.features") return FeatureSourcesName(o.features);
   if (key == "register.ratio") return Number(o.match.ratio);
+  if (key == "register.coarse_scale") return Number(o.geometric.coarse_scale);
   if (key == "register.noise_m") return Number(o.range_sigma_m);
   if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
   if (key == "register.global") return o.global ? "true" : "false";
@@ -136,6 +138,12 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   if (key == "register.fine") return SetChoice(s, value, AllFineMethods(), FineMethodName, &o->fine);
   if (key == "register.features") return SetChoice(s, value, AllFeatureSources(), FeatureSourcesName, &o->features);
   if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
+  if (key == "register.coarse_scale") {
+    if (Status st = SetNumber(s, value, 0.0, 20.0, &o->geometric.coarse_scale); !st) return st;
+    if (o->geometric.coarse_scale != 0 && o->geometric.coarse_scale <= 1.0)
+      return Bad(s, value, "give 0 (the fine scale only) or more than 1 voxel (3: for stations far apart)");
+    return Status::Ok();
+  }
   if (key == "register.noise_m") return SetNumber(s, value, 0.0, 0.5, &o->range_sigma_m);
   if (key == "register.overlap_distance_m") return SetNumber(s, value, 0.0, 100.0, &o->overlap_distance_m);
   if (key == "register.sphere_radius_m") return SetNumber(s, value, 0.005, 2.0, &o->spheres.radius_m);

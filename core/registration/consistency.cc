@@ -12,7 +12,8 @@ std::vector<int> ConsistentIndices(const std::vector<Correspondence3d>& correspo
   const double a2 = angular_rad * angular_rad;
   for (std::size_t i = 0; i < correspondences.size(); ++i) {
     const auto& c = correspondences[i];
-    const double t2 = threshold_m * threshold_m + a2 * c.child.squaredNorm();
+    const double t = c.tolerance_m > 0.0 ? c.tolerance_m : threshold_m;
+    const double t2 = t * t + a2 * c.child.squaredNorm();
     if ((c.parent - parent_from_child * c.child).squaredNorm() <= t2) out.push_back(static_cast<int>(i));
   }
   return out;

@@ -11,7 +11,8 @@ namespace scanreg {
 
 // Indices (ascending) of the pairs with |parent - parent_from_child * child| <= t, where
 // t = sqrt(threshold_m^2 + (angular_rad * |child|)^2): the angular term is keypoint localisation
-// (about a pixel of angular_rad) growing with the range; 0 gives W's fixed threshold.
+// (about a pixel of angular_rad) growing with the range; 0 gives W's fixed threshold. A pair with
+// its own tolerance (Correspondence3d::tolerance_m > 0) uses it in place of threshold_m.
 std::vector<int> ConsistentIndices(const std::vector<Correspondence3d>& correspondences,
                                    const Eigen::Isometry3d& parent_from_child, double threshold_m,
                                    double angular_rad = 0.0);

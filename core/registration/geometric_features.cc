@@ -70,6 +70,8 @@ Status GeometricOptions::Validate() const {
   if (!(distinctive_fraction > 0.0 && distinctive_fraction <= 1.0)) return bad("distinctive_fraction must be in (0, 1]");
   if (!(normal_radius_voxels >= 1.0) || !(feature_radius_voxels > normal_radius_voxels))
     return bad("need 1 <= normal_radius_voxels < feature_radius_voxels");
+  if (!(coarse_scale == 0.0 || (coarse_scale > 1.0 && coarse_scale <= 20.0)))
+    return bad("coarse_scale must be 0 (one scale) or in (1, 20] voxels");
   return Status::Ok();
 }
 
@@ -77,15 +79,26 @@ double SuggestVoxel(const DataScale& d) { return d.ok() ? std::max(3.0 * d.spaci
 
 double SuggestVoxel(const Scan& scan) { return SuggestVoxel(MeasureDataScale(scan)); }
 
-Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
-                                                    const CancelToken& cancel) {
-  if (Status s = options.Validate(); !s) return s.error();
-  if (!(options.voxel_m > 0.0)) return MakeError(ErrorCode::kInvalidArgument, "geometric features: no voxel size");
-  GeometricFeatures f;
-  f.voxel_m = options.voxel_m;
-  std::vector<Eigen::Vector3d> samples = ThinEvenly(VoxelDownsample(ValidPoints(scan), options.voxel_m), options.max_samples);
-  if (samples.size() < 20) return f;  // nothing to describe: no geometric matches
-  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+double GeometricFeatures::VoxelOf(int point) const {
+  for (const Scale& s : scales)
+    if (point >= s.begin && point < s.end) return s.voxel_m;
+  return voxel_m;
+}
+
+namespace {
+
+// Normals and FPFH descriptors of the scan's samples at one voxel, appended to *f as a new scale;
+// *curvature gets one value per appended point. False when cancelled.
+bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, const GeometricOptions& options,
+                   const CancelToken& cancel, GeometricFeatures* f, std::vector<float>* curvature) {
+  GeometricFeatures::Scale scale;
+  scale.voxel_m = voxel_m;
+  scale.begin = scale.end = static_cast<int>(f->points.size());
+  const std::vector<Eigen::Vector3d> samples = ThinEvenly(VoxelDownsample(valid, voxel_m), options.max_samples);
+  if (samples.size() < 20) {  // nothing to describe at this scale: no matches from it
+    f->scales.push_back(scale);
+    return true;
+  }
   // Float coordinates relative to the centroid (clouds far from the origin keep their precision).
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (const auto& p : samples) origin += p;
@@ -101,24 +114,22 @@ Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const Geom
   pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(cloud);
   ne.setSearchMethod(tree);
-  ne.setRadiusSearch(options.normal_radius_voxels * options.voxel_m);
+  ne.setRadiusSearch(options.normal_radius_voxels * voxel_m);
   // Normals face the scanner (the scan frame's origin), as PCL's viewpoint convention.
   const Eigen::Vector3f viewpoint = (-origin).cast<float>();
   ne.setViewPoint(viewpoint.x(), viewpoint.y(), viewpoint.z());
   ne.compute(*normals);
-  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+  if (cancel.IsCancelled()) return false;
 
   pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe;
   fe.setInputCloud(cloud);
   fe.setInputNormals(normals);
   fe.setSearchMethod(tree);
-  fe.setRadiusSearch(options.feature_radius_voxels * options.voxel_m);
+  fe.setRadiusSearch(options.feature_radius_voxels * voxel_m);
   pcl::PointCloud<pcl::FPFHSignature33> fpfh;
   fe.compute(fpfh);
-  if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "geometric features cancelled");
+  if (cancel.IsCancelled()) return false;
 
-  std::vector<Eigen::Vector3d> good_normals;
-  std::vector<float> curvature;
   auto kept = pcl::make_shared<pcl::PointCloud<pcl::FPFHSignature33>>();
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const pcl::Normal& n = (*normals)[i];
@@ -127,55 +138,103 @@ Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const Geom
     float sum = 0.f;
     for (int k = 0; k < 33; ++k) sum += h[k];
     if (!(sum > 0.f)) continue;  // too few neighbours
-    f.points.push_back(samples[i]);
+    f->points.push_back(samples[i]);
     Fpfh d;
     std::copy(h, h + 33, d.begin());
-    f.descriptors.push_back(d);
+    f->descriptors.push_back(d);
     kept->push_back(fpfh[i]);
-    good_normals.emplace_back(n.normal_x, n.normal_y, n.normal_z);
-    f.normals.push_back(good_normals.back());
-    curvature.push_back(n.curvature);
+    f->normals.emplace_back(n.normal_x, n.normal_y, n.normal_z);
+    curvature->push_back(n.curvature);
   }
-  if (f.points.size() < 20) {
+  if (kept->size() < 20) {  // too few described samples: drop them, no matches from this scale
+    f->points.resize(scale.begin);
+    f->normals.resize(scale.begin);
+    f->descriptors.resize(scale.begin);
+    curvature->resize(scale.begin);
+    f->scales.push_back(scale);
+    return true;
+  }
+  scale.end = static_cast<int>(f->points.size());
+  auto index = std::make_shared<GeometricFeatures::DescriptorIndex>();
+  index->tree.setInputCloud(kept);
+  scale.index = index;
+  f->scales.push_back(scale);
+  return true;
+}
+
+// Keypoints of one scale: its most curved fraction, in sample order, thinned evenly to at most
+// max_keypoints.
+void AddKeypoints(const GeometricFeatures::Scale& scale, const std::vector<float>& curvature,
+                  double distinctive_fraction, int max_keypoints, std::vector<int>* keypoints) {
+  if (scale.end <= scale.begin) return;
+  std::vector<float> sorted(curvature.begin() + scale.begin, curvature.begin() + scale.end);
+  const std::size_t cut = static_cast<std::size_t>((1.0 - distinctive_fraction) * (sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
+  std::vector<int> distinctive;
+  for (int i = scale.begin; i < scale.end; ++i)
+    if (distinctive_fraction >= 1.0 || curvature[i] >= sorted[cut]) distinctive.push_back(i);
+  const int m = static_cast<int>(distinctive.size());
+  const int k = std::min(m, max_keypoints);
+  for (int i = 0; i < k; ++i) keypoints->push_back(distinctive[static_cast<std::size_t>(i * double(m) / k)]);
+}
+
+}  // namespace
+
+Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const GeometricOptions& options,
+                                                    const CancelToken& cancel) {
+  if (Status s = options.Validate(); !s) return s.error();
+  if (!(options.voxel_m > 0.0)) return MakeError(ErrorCode::kInvalidArgument, "geometric features: no voxel size");
+  GeometricFeatures f;
+  f.voxel_m = options.voxel_m;
+  const std::vector<Eigen::Vector3d> valid = ValidPoints(scan);
+  std::vector<float> curvature;
+  const auto cancelled = [] { return MakeError(ErrorCode::kCancelled, "geometric features cancelled"); };
+  if (cancel.IsCancelled() || !DescribeScale(valid, options.voxel_m, options, cancel, &f, &curvature))
+    return cancelled();
+  if (f.FinestEnd() == 0) {  // nothing to describe: no geometric matches, no levelling
     f.points.clear();
     f.normals.clear();
     f.descriptors.clear();
+    f.scales.clear();
     return f;
   }
-  EstimateUp(good_normals, &f);
-  // Keypoints: the most curved fraction, in sample order, thinned evenly.
-  std::vector<float> sorted = curvature;
-  const std::size_t cut = static_cast<std::size_t>((1.0 - options.distinctive_fraction) * (sorted.size() - 1));
-  std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
-  std::vector<int> distinctive;
-  for (std::size_t i = 0; i < curvature.size(); ++i)
-    if (options.distinctive_fraction >= 1.0 || curvature[i] >= sorted[cut]) distinctive.push_back(static_cast<int>(i));
-  const int m = static_cast<int>(distinctive.size());
-  const int k = std::min(m, options.max_keypoints);
-  for (int i = 0; i < k; ++i) f.keypoints.push_back(distinctive[static_cast<std::size_t>(i * double(m) / k)]);
-  auto index = std::make_shared<GeometricFeatures::DescriptorIndex>();
-  index->tree.setInputCloud(kept);
-  f.index = index;
+  if (options.coarse_scale > 0.0 &&
+      !DescribeScale(valid, options.coarse_scale * options.voxel_m, options, cancel, &f, &curvature))
+    return cancelled();
+  EstimateUp(std::vector<Eigen::Vector3d>(f.normals.begin(), f.normals.begin() + f.FinestEnd()), &f);
+  // The coarse scale's samples are all candidates: at half a metre the curvature no longer tells a
+  // corner from a façade (measured: the most curved half gives a 12 m tilted street 2 of 6 scans,
+  // every sample 6 of 6).
+  for (std::size_t i = 0; i < f.scales.size(); ++i)
+    AddKeypoints(f.scales[i], curvature, i == 0 ? options.distinctive_fraction : 1.0, options.max_keypoints,
+                 &f.keypoints);
   return f;
 }
 
 std::vector<GeometricMatch> MatchGeometric(const GeometricFeatures& parent, const GeometricFeatures& child,
                                            double ratio) {
   std::vector<GeometricMatch> out;
-  if (!parent.index || !child.index) return out;
-  const double near2 = 4.0 * child.voxel_m * child.voxel_m;
+  const std::size_t scales = std::min(parent.scales.size(), child.scales.size());
   pcl::Indices idx(2), back(1);
   std::vector<float> d2(2), back_d2(1);
-  for (int k : child.keypoints) {
-    pcl::FPFHSignature33 q;
-    std::copy(child.descriptors[k].begin(), child.descriptors[k].end(), q.histogram);
-    if (parent.index->tree.nearestKSearch(q, 2, idx, d2) < 2) continue;
-    if (!(d2[0] <= ratio * ratio * d2[1])) continue;
-    pcl::FPFHSignature33 p;
-    std::copy(parent.descriptors[idx[0]].begin(), parent.descriptors[idx[0]].end(), p.histogram);
-    if (child.index->tree.nearestKSearch(p, 1, back, back_d2) < 1) continue;
-    if ((child.points[back[0]] - child.points[k]).squaredNorm() > near2) continue;
-    out.push_back({static_cast<int>(idx[0]), k});
+  for (std::size_t s = 0; s < scales; ++s) {
+    const GeometricFeatures::Scale& ps = parent.scales[s];
+    const GeometricFeatures::Scale& cs = child.scales[s];
+    if (!ps.index || !cs.index) continue;
+    const double near2 = 4.0 * cs.voxel_m * cs.voxel_m;
+    for (int k : child.keypoints) {
+      if (k < cs.begin || k >= cs.end) continue;
+      pcl::FPFHSignature33 q;
+      std::copy(child.descriptors[k].begin(), child.descriptors[k].end(), q.histogram);
+      if (ps.index->tree.nearestKSearch(q, 2, idx, d2) < 2) continue;
+      if (!(d2[0] <= ratio * ratio * d2[1])) continue;
+      const int p = ps.begin + static_cast<int>(idx[0]);
+      pcl::FPFHSignature33 pd;
+      std::copy(parent.descriptors[p].begin(), parent.descriptors[p].end(), pd.histogram);
+      if (cs.index->tree.nearestKSearch(pd, 1, back, back_d2) < 1) continue;
+      if ((child.points[cs.begin + back[0]] - child.points[k]).squaredNorm() > near2) continue;
+      out.push_back({p, k});
+    }
   }
   return out;
 }

@@ -74,7 +74,7 @@ PlanView MakePlanView(const GeometricFeatures& features, const PlanOptions& opti
   const Eigen::Isometry3d level = features.Levelling();
   const double s15 = std::sin(15.0 * M_PI / 180.0), c15 = std::cos(15.0 * M_PI / 180.0);
   std::vector<double> ground;
-  for (std::size_t i = 0; i < features.points.size(); ++i) {
+  for (int i = 0; i < features.FinestEnd(); ++i) {  // the finest scale's samples
     const Eigen::Vector3d p = level * features.points[i];
     const Eigen::Vector3d n = level.linear() * features.normals[i];
     const double r = p.head<2>().norm();

@@ -59,6 +59,7 @@ void RunGeorefBench(Table& table, bool quick);
 void RunCityBench(Table& table, bool quick);
 void RunTrustBench(Table& table, bool quick);  // bench_trust.cc
 void RunInteriorsBench(Table& table, bool quick);  // bench_interiors.cc
+void RunCombinedBench(Table& table, bool quick);   // bench_combined.cc
 void RunBigScansBench(Table& table, bool quick);  // bench_city.cc
 
 }  // namespace scanreg::bench

@@ -18,6 +18,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   options.overlap_distance_m = 0.01;
   options.global = false;
   options.keep_imported = true;
+  options.geometric.coarse_scale = 3.0;
   std::map<std::string, std::string> settings{{"simulated.seed", "3"}};
   StoreRegisterSettings(options, &settings);
   EXPECT_EQ(settings.at("register.coarse"), "none");
@@ -32,6 +33,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   EXPECT_EQ(back->overlap_distance_m, 0.01);
   EXPECT_FALSE(back->global);
   EXPECT_TRUE(back->keep_imported);
+  EXPECT_EQ(back->geometric.coarse_scale, 3.0);
   // Every setting's value, applied to the defaults, gives the value back.
   for (const RegisterSetting& s : RegisterSettings()) {
     RegisterOptions fresh;
