@@ -132,6 +132,12 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
     if (evlr > point_offset && evlr < end) end = evlr;
   }
   const std::uint64_t room = (end - point_offset) / static_cast<std::uint64_t>(out.record_length);
+  if (count == 0 && room > 0) {  // a writer that never filled in the count: not an empty file
+    return bad("the header says it holds 0 points, but " + std::to_string(room) + " complete " +
+               std::to_string(out.record_length) +
+               "-byte records follow it: the header is damaged (rewrite the file, e.g. with pdal translate or "
+               "las2las)");
+  }
   if (count > room) {
     return bad("the header promises " + std::to_string(count) + " points, but the file holds only " +
                std::to_string(room) + " complete " + std::to_string(out.record_length) +

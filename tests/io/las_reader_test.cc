@@ -295,6 +295,9 @@ TEST(LasReader, DamagedFilesAreClearErrorsNamingTheFileAndWhatToDo) {
   huge.count_override = 1ull << 40;  // a trillion points promised by a 500-byte file: no allocation
   cases.push_back({"huge.las", huge.Bytes(), "promises 1099511627776 points"});
   cases.push_back({"scan.laz", good, "LAZ"});
+  std::string zero = ThreePoints(2, 1).Bytes();  // LAS 1.2: the legacy count is the only one
+  std::memset(&zero[107], 0, 4);
+  cases.push_back({"zero.las", zero, "says it holds 0 points, but 3 complete"});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const Error e = ReadError(write(c.name, c.bytes));
