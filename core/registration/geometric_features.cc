@@ -87,10 +87,26 @@ double GeometricFeatures::VoxelOf(int point) const {
 
 namespace {
 
-// Normals and FPFH descriptors of the scan's samples at one voxel, appended to *f as a new scale;
-// *curvature gets one value per appended point. False when cancelled.
-bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, const GeometricOptions& options,
-                   const CancelToken& cancel, GeometricFeatures* f, std::vector<float>* curvature) {
+// Keypoints of one scale: the most curved fraction of its samples, in sample order, thinned evenly
+// to at most max_keypoints.
+void AddKeypoints(const GeometricFeatures::Scale& scale, const std::vector<float>& curvature,
+                  double distinctive_fraction, int max_keypoints, std::vector<int>* keypoints) {
+  if (curvature.empty()) return;
+  std::vector<float> sorted = curvature;
+  const std::size_t cut = static_cast<std::size_t>((1.0 - distinctive_fraction) * (sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
+  std::vector<int> distinctive;
+  for (std::size_t i = 0; i < curvature.size(); ++i)
+    if (distinctive_fraction >= 1.0 || curvature[i] >= sorted[cut]) distinctive.push_back(scale.begin + static_cast<int>(i));
+  const int m = static_cast<int>(distinctive.size());
+  const int k = std::min(m, max_keypoints);
+  for (int i = 0; i < k; ++i) keypoints->push_back(distinctive[static_cast<std::size_t>(i * double(m) / k)]);
+}
+
+// Normals, FPFH descriptors and keypoints (the distinctive_fraction most curved samples) of the
+// scan's samples at one voxel, appended to *f as a new scale. False when cancelled.
+bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, double distinctive_fraction,
+                   const GeometricOptions& options, const CancelToken& cancel, GeometricFeatures* f) {
   GeometricFeatures::Scale scale;
   scale.voxel_m = voxel_m;
   scale.begin = scale.end = static_cast<int>(f->points.size());
@@ -131,6 +147,7 @@ bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, co
   if (cancel.IsCancelled()) return false;
 
   auto kept = pcl::make_shared<pcl::PointCloud<pcl::FPFHSignature33>>();
+  std::vector<float> curvature;
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const pcl::Normal& n = (*normals)[i];
     const float* h = fpfh[i].histogram;
@@ -144,13 +161,12 @@ bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, co
     f->descriptors.push_back(d);
     kept->push_back(fpfh[i]);
     f->normals.emplace_back(n.normal_x, n.normal_y, n.normal_z);
-    curvature->push_back(n.curvature);
+    curvature.push_back(n.curvature);
   }
   if (kept->size() < 20) {  // too few described samples: drop them, no matches from this scale
     f->points.resize(scale.begin);
     f->normals.resize(scale.begin);
     f->descriptors.resize(scale.begin);
-    curvature->resize(scale.begin);
     f->scales.push_back(scale);
     return true;
   }
@@ -159,23 +175,8 @@ bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, co
   index->tree.setInputCloud(kept);
   scale.index = index;
   f->scales.push_back(scale);
+  AddKeypoints(scale, curvature, distinctive_fraction, options.max_keypoints, &f->keypoints);
   return true;
-}
-
-// Keypoints of one scale: its most curved fraction, in sample order, thinned evenly to at most
-// max_keypoints.
-void AddKeypoints(const GeometricFeatures::Scale& scale, const std::vector<float>& curvature,
-                  double distinctive_fraction, int max_keypoints, std::vector<int>* keypoints) {
-  if (scale.end <= scale.begin) return;
-  std::vector<float> sorted(curvature.begin() + scale.begin, curvature.begin() + scale.end);
-  const std::size_t cut = static_cast<std::size_t>((1.0 - distinctive_fraction) * (sorted.size() - 1));
-  std::nth_element(sorted.begin(), sorted.begin() + cut, sorted.end());
-  std::vector<int> distinctive;
-  for (int i = scale.begin; i < scale.end; ++i)
-    if (distinctive_fraction >= 1.0 || curvature[i] >= sorted[cut]) distinctive.push_back(i);
-  const int m = static_cast<int>(distinctive.size());
-  const int k = std::min(m, max_keypoints);
-  for (int i = 0; i < k; ++i) keypoints->push_back(distinctive[static_cast<std::size_t>(i * double(m) / k)]);
 }
 
 }  // namespace
@@ -187,27 +188,20 @@ Expected<GeometricFeatures> DetectGeometricFeatures(const Scan& scan, const Geom
   GeometricFeatures f;
   f.voxel_m = options.voxel_m;
   const std::vector<Eigen::Vector3d> valid = ValidPoints(scan);
-  std::vector<float> curvature;
   const auto cancelled = [] { return MakeError(ErrorCode::kCancelled, "geometric features cancelled"); };
-  if (cancel.IsCancelled() || !DescribeScale(valid, options.voxel_m, options, cancel, &f, &curvature))
+  if (cancel.IsCancelled() ||
+      !DescribeScale(valid, options.voxel_m, options.distinctive_fraction, options, cancel, &f))
     return cancelled();
   if (f.FinestEnd() == 0) {  // nothing to describe: no geometric matches, no levelling
-    f.points.clear();
-    f.normals.clear();
-    f.descriptors.clear();
     f.scales.clear();
     return f;
   }
-  if (options.coarse_scale > 0.0 &&
-      !DescribeScale(valid, options.coarse_scale * options.voxel_m, options, cancel, &f, &curvature))
+  // The coarse scale's samples are all candidates: at half a metre the curvature no longer tells a
+  // corner from a façade (measured: the most curved half gives a 12 m tilted street 3 of 6 scans,
+  // every sample 6 of 6).
+  if (options.coarse_scale > 0.0 && !DescribeScale(valid, options.coarse_scale * options.voxel_m, 1.0, options, cancel, &f))
     return cancelled();
   EstimateUp(std::vector<Eigen::Vector3d>(f.normals.begin(), f.normals.begin() + f.FinestEnd()), &f);
-  // The coarse scale's samples are all candidates: at half a metre the curvature no longer tells a
-  // corner from a façade (measured: the most curved half gives a 12 m tilted street 2 of 6 scans,
-  // every sample 6 of 6).
-  for (std::size_t i = 0; i < f.scales.size(); ++i)
-    AddKeypoints(f.scales[i], curvature, i == 0 ? options.distinctive_fraction : 1.0, options.max_keypoints,
-                 &f.keypoints);
   return f;
 }
 
