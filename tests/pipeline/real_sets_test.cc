@@ -22,6 +22,101 @@ PoseError PairError(const test::RealSet& set, const std::vector<Eigen::Isometry3
                                                          *set.scans[j].reference_world_from_scan);
 }
 
+struct Trust {
+  int registered = 0, pairs = 0, within = 0, wrong = 0;
+};
+
+// From 5 deg / 5 mm starts (two seeds), what `register` does on imported poses: refinement never
+// leaves the project less consistent than its start, at least one scan besides the root is placed,
+// and every scan left out says why. Returns the pairs' figures of the last seed.
+Trust FromImportedPoses(const test::RealSet& set) {
+  const std::size_t n = set.scans.size();
+  NullProgress progress;
+  CancelToken cancel;
+  Trust t;
+  for (unsigned seed : {1u, 2u}) {
+    t = {};
+    std::vector<Scan> scans = set.scans;
+    std::vector<Eigen::Isometry3d> start;
+    for (std::size_t i = 0; i < n; ++i) {
+      scans[i].world_from_scan =
+          testing::MovedPose(*scans[i].reference_world_from_scan, 5, 5, seed * 100 + static_cast<unsigned>(i));
+      start.push_back(scans[i].world_from_scan);
+    }
+    RegisterOptions o;
+    o.from_current_poses = true;  // what `register` does on imported poses
+    Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
+    EXPECT_TRUE(r.ok()) << r.error().ToString();
+    if (!r.ok() || !r->consistency.has_value()) {
+      ADD_FAILURE() << set.name << ": no consistency figure";
+      return t;
+    }
+    std::vector<Eigen::Isometry3d> world;
+    for (const ScanRegistration& s : r->scans) world.push_back(s.world_from_scan);
+    int farther = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      t.registered += r->scans[i].registered;
+      if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+      for (std::size_t j = i + 1; j < n; ++j) {
+        if (!r->scans[i].registered || !r->scans[j].registered) continue;
+        const PoseError before = PairError(set, start, i, j), after = PairError(set, world, i, j);
+        ++t.pairs;
+        t.within += after.position_m <= set.WithinM(i, j) && after.angle_rad * kDeg <= set.within_deg;
+        t.wrong += after.position_m > set.wrong_m || after.angle_rad * kDeg > set.wrong_deg;
+        const bool got_worse = after.position_m > before.position_m || after.angle_rad > before.angle_rad;
+        farther += got_worse;
+        std::printf("  %s-%s: %.1f mm %.2f deg from the reference (start %.1f mm %.2f deg)%s\n", scans[i].name.c_str(),
+                    scans[j].name.c_str(), 1e3 * after.position_m, after.angle_rad * kDeg, 1e3 * before.position_m,
+                    before.angle_rad * kDeg, got_worse ? "  farther" : "");
+      }
+    }
+    std::printf("%s from 5 deg / 5 mm, seed %u: %d of %zu registered, %d of %d pairs farther from the reference than "
+                "at the start, %d within %.0f mm (+%.0f a step) / %.1f deg, %d beyond %.0f mm / %.0f deg; consistency %.2f -> %.2f mm\n",
+                set.name.c_str(), seed, t.registered, n, farther, t.pairs, t.within, 1e3 * set.within_m, 1e3 * set.within_m_per_step, set.within_deg,
+                t.wrong, 1e3 * set.wrong_m, set.wrong_deg, 1e3 * r->consistency->start_rms_m,
+                1e3 * r->consistency->result_rms_m);
+    EXPECT_GE(t.registered, 2) << set.name;  // the root and at least one scan placed by the refinement
+    EXPECT_LE(r->consistency->result_rms_m, r->consistency->start_rms_m) << set.name;
+  }
+  return t;
+}
+
+// With no poses (every scan at the identity) and default options: no pair of registered scans beyond
+// the set's "wrong" tolerance, and every scan left out says why.
+Trust FromNoPoses(const test::RealSet& set) {
+  const std::size_t n = set.scans.size();
+  NullProgress progress;
+  CancelToken cancel;
+  std::vector<Scan> scans = set.scans;
+  for (Scan& s : scans) s.world_from_scan = Eigen::Isometry3d::Identity();
+  Expected<ProjectRegistration> r = RegisterScans(scans, {}, RegisterOptions(), progress, cancel);
+  EXPECT_TRUE(r.ok()) << r.error().ToString();
+  Trust t;
+  if (!r.ok()) return t;
+  std::vector<Eigen::Isometry3d> world;
+  for (const ScanRegistration& s : r->scans) world.push_back(s.world_from_scan);
+  for (std::size_t i = 0; i < n; ++i) {
+    t.registered += r->scans[i].registered;
+    if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (!r->scans[i].registered || !r->scans[j].registered) continue;
+      const PoseError e = PairError(set, world, i, j);
+      ++t.pairs;
+      t.within += e.position_m <= set.WithinM(i, j) && e.angle_rad * kDeg <= set.within_deg;
+      t.wrong += e.position_m > set.wrong_m || e.angle_rad * kDeg > set.wrong_deg;
+      std::printf("  %s-%s: %.1f mm %.2f deg from the reference\n", scans[i].name.c_str(), scans[j].name.c_str(),
+                  1e3 * e.position_m, e.angle_rad * kDeg);
+    }
+  }
+  std::printf("%s from identity: %d of %zu registered, %d of %d pairs within %.0f mm (+%.0f a step) / %.1f deg, %d beyond %.0f mm / "
+              "%.0f deg\n",
+              set.name.c_str(), t.registered, n, t.within, t.pairs, 1e3 * set.within_m, 1e3 * set.within_m_per_step,
+              set.within_deg, t.wrong,
+              1e3 * set.wrong_m, set.wrong_deg);
+  EXPECT_EQ(t.wrong, 0) << set.name;
+  return t;
+}
+
 // Twelve Kinect keyframes circling a cabinet: a floor and a few box faces, depth distorted by
 // centimetres, reference poses good to a few centimetres only (7 of the 11 consecutive pairs put over
 // 5 % of one frame in the other's free space at the reference), so they judge gross errors, not
@@ -33,64 +128,25 @@ TEST(RealSets, TumCabinetRefinementIsMoreConsistentAndSaysWhyAScanIsLeftOut) {
   SCANREG_REQUIRE_REALDATA(data);
   Expected<test::RealSet> set = test::LoadTumCabinet(data);
   ASSERT_TRUE(set.ok()) << set.error().ToString();
-  const std::size_t n = set->scans.size();
-  NullProgress progress;
-  CancelToken cancel;
-  for (unsigned seed : {1u, 2u}) {
-    std::vector<Scan> scans = set->scans;
-    std::vector<Eigen::Isometry3d> start;
-    for (std::size_t i = 0; i < n; ++i) {
-      scans[i].world_from_scan =
-          testing::MovedPose(*scans[i].reference_world_from_scan, 5, 5, seed * 100 + static_cast<unsigned>(i));
-      start.push_back(scans[i].world_from_scan);
-    }
-    RegisterOptions o;
-    o.from_current_poses = true;  // what `register` does on imported poses
-    Expected<ProjectRegistration> r = RegisterScans(scans, {}, o, progress, cancel);
-    ASSERT_TRUE(r.ok()) << r.error().ToString();
-    ASSERT_TRUE(r->consistency.has_value());
-    std::vector<Eigen::Isometry3d> world;
-    for (const ScanRegistration& s : r->scans) world.push_back(s.world_from_scan);
-    int registered = 0, pairs = 0, farther = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      registered += r->scans[i].registered;
-      if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
-      for (std::size_t j = i + 1; j < n; ++j) {
-        if (!r->scans[i].registered || !r->scans[j].registered) continue;
-        const PoseError before = PairError(*set, start, i, j), after = PairError(*set, world, i, j);
-        ++pairs;
-        const bool got_worse = after.position_m > before.position_m || after.angle_rad > before.angle_rad;
-        farther += got_worse;
-        std::printf("  %s-%s: %.1f mm %.2f deg from the reference (start %.1f mm %.2f deg)%s\n", scans[i].name.c_str(),
-                    scans[j].name.c_str(), 1e3 * after.position_m, after.angle_rad * kDeg, 1e3 * before.position_m,
-                    before.angle_rad * kDeg, got_worse ? "  farther" : "");
-      }
-    }
-    std::printf("tum_fr3_cabinet from 5 deg / 5 mm, seed %u: %d of %zu registered, %d of %d pairs farther from the "
-                "reference than at the start; consistency %.2f -> %.2f mm\n",
-                seed, registered, n, farther, pairs, 1e3 * r->consistency->start_rms_m, 1e3 * r->consistency->result_rms_m);
-    EXPECT_GE(registered, 2);  // the root and at least one scan placed by the refinement
-    EXPECT_LE(r->consistency->result_rms_m, r->consistency->start_rms_m);
-  }
-  std::vector<Scan> scans = set->scans;
-  for (Scan& s : scans) s.world_from_scan = Eigen::Isometry3d::Identity();
-  Expected<ProjectRegistration> r = RegisterScans(scans, {}, RegisterOptions(), progress, cancel);
-  ASSERT_TRUE(r.ok()) << r.error().ToString();
-  int registered = 0, wrong = 0;
-  std::vector<Eigen::Isometry3d> world;
-  for (const ScanRegistration& s : r->scans) world.push_back(s.world_from_scan);
-  for (std::size_t i = 0; i < n; ++i) {
-    registered += r->scans[i].registered;
-    if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
-    for (std::size_t j = i + 1; j < n; ++j) {
-      if (!r->scans[i].registered || !r->scans[j].registered) continue;
-      const PoseError e = PairError(*set, world, i, j);
-      wrong += e.position_m > set->wrong_m || e.angle_rad * kDeg > set->wrong_deg;
-    }
-  }
-  std::printf("tum_fr3_cabinet from identity: %d of %zu registered, %d pairs beyond %.0f mm / %.0f deg\n", registered,
-              n, wrong, 1e3 * set->wrong_m, set->wrong_deg);
-  EXPECT_EQ(wrong, 0);
+  FromImportedPoses(*set);
+  FromNoPoses(*set);
+}
+
+// Mobile lidar: four consecutive KITTI Velodyne sweeps 0.86 m apart, read from PLY as a user imports
+// them (not tuned on: added after the product's thresholds). Besides the protocol above: from no
+// poses every scan is registered and 90 % of the pairs land within the reference's own precision
+// (0.13-0.17 m a frame along the way the car drives, measured by an independent ICP, + 2 x the
+// lidar's noise). Today all six pairs do, 0.13-0.45 m from the GPS/INS poses where that ICP put them.
+TEST(RealSets, KittiVelodyneSweepsRegisterWithinTheReferencesPrecision) {
+  SCANREG_REQUIRE_REALDATA(data);
+  Expected<test::RealSet> set = test::LoadKittiVelodyne(data);
+  ASSERT_TRUE(set.ok()) << set.error().ToString();
+  const Trust imported = FromImportedPoses(*set);
+  EXPECT_EQ(imported.registered, static_cast<int>(set->scans.size()));
+  EXPECT_GE(imported.within, (9 * imported.pairs + 9) / 10);
+  const Trust t = FromNoPoses(*set);
+  EXPECT_EQ(t.registered, static_cast<int>(set->scans.size()));
+  EXPECT_GE(t.within, (9 * t.pairs + 9) / 10);
 }
 
 }  // namespace
