@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -87,7 +88,23 @@ double AngularStep(const Scan& scan) {
   return std::max(az, el);
 }
 
+// Columns cover (nearly) the whole circle: at least 33 of 36 ten-degree sectors.
+bool FullCircle(const AngularGrid& angles) {
+  std::array<bool, 36> seen{};
+  for (float a : angles.azimuth) {
+    if (!std::isfinite(a)) continue;
+    const int k = static_cast<int>(std::floor((a + M_PI) / (2.0 * M_PI) * 36.0));
+    seen[std::clamp(k, 0, 35)] = true;
+  }
+  return std::count(seen.begin(), seen.end(), true) >= 33;
+}
+
 }  // namespace
+
+bool SameSpot(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& parent_from_child) {
+  if (!parent.panoramic || !child.panoramic) return false;
+  return parent_from_child.translation().norm() < 0.2 * std::min(parent.median_range_m, child.median_range_m);
+}
 
 Expected<std::shared_ptr<const Scan>> PreparedScan::Full() const {
   if (scan) return std::shared_ptr<const Scan>(std::shared_ptr<const Scan>(), scan);
@@ -125,6 +142,14 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   prepared->samples = ToFloat(VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m));
   prepared->surface_options = options.dense_icp;
   prepared->plan = MakePlanView(prepared->geometric);
+  prepared->panoramic = FullCircle(scan.angles);
+  std::vector<float> ranges;
+  ranges.reserve(prepared->samples.size());
+  for (const Eigen::Vector3f& p : prepared->samples) ranges.push_back(p.norm());
+  if (!ranges.empty()) {
+    std::nth_element(ranges.begin(), ranges.begin() + ranges.size() / 2, ranges.end());
+    prepared->median_range_m = ranges[ranges.size() / 2];
+  }
 }
 
 int GeometricWeight(const PreparedScan& parent, const PreparedScan& child, const std::vector<GeometricMatch>& geometric,
@@ -460,6 +485,15 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     link.reason = Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
                          "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop confirms it",
                          100 * link.moving);
+    result.needs_loop = true;
+  } else if (SameSpot(parent, child, best.parent_from_child)) {
+    // A corridor or a row of rooms fits itself at its own spot, turned 180° or slid by a door
+    // (measured: an office floor's end stations, 24.7 m apart, placed on each other with 82 %
+    // overlap and no conflict): without features, a loop must say which spot.
+    link.status = io::LinkStatus::kWeak;
+    link.reason = Format("plan-view pose without feature support that puts both scanners at one spot (%.2f m "
+                         "apart): a corridor or a row of rooms fits itself there; a loop confirms it",
+                         best.parent_from_child.translation().norm());
     result.needs_loop = true;
   } else {
     link.status = io::LinkStatus::kOk;

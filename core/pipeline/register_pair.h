@@ -37,6 +37,8 @@ struct PreparedScan {
   double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
+  bool panoramic = false;       // a full-circle grid: a tripod station that sees all round
+  double median_range_m = 0.0;  // of the samples, from the scanner
   // Valid points voxel-downsampled at the dense ICP voxel, scanner frame, in single precision (kept
   // for the whole run: 12 bytes a sample; ToDouble for use).
   std::vector<Eigen::Vector3f> samples;
@@ -54,6 +56,13 @@ struct PreparedScan {
   // The full scan; an error when the store cannot read it again.
   Expected<std::shared_ptr<const Scan>> Full() const;
 };
+
+// Whether this pose puts two panoramic stations on one spot: nearer than a fifth of the nearer
+// one's median range. Measured on office floors: a plan-view pose put a corridor station on another's
+// spot 0.03-0.17 of it away, turned 180°; neighbouring street stations 3 m apart are 0.19 of it, and
+// consecutive KITTI Velodyne sweeps 0.05-0.11 (mobile lidar: feature-supported links, where this is
+// not asked).
+bool SameSpot(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& parent_from_child);
 
 // Sets name, scan and angular step from a scan the caller keeps (and forgets any surface).
 void HoldScan(const Scan& scan, PreparedScan* prepared);
