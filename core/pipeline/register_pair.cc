@@ -99,12 +99,17 @@ bool FullCircle(const AngularGrid& angles) {
   return std::count(seen.begin(), seen.end(), true) >= 33;
 }
 
-}  // namespace
-
+// Whether this pose puts two panoramic stations on one spot: nearer than a fifth of the nearer
+// one's median range. Measured on office floors: a plan-view pose put a corridor station on another's
+// spot 0.03-0.17 of it away, turned 180°; neighbouring street stations 3 m apart are 0.19 of it, and
+// consecutive KITTI Velodyne sweeps 0.05-0.11 (mobile lidar: feature-supported links, where this is
+// not asked).
 bool SameSpot(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& parent_from_child) {
   if (!parent.panoramic || !child.panoramic) return false;
   return parent_from_child.translation().norm() < 0.2 * std::min(parent.median_range_m, child.median_range_m);
 }
+
+}  // namespace
 
 Expected<std::shared_ptr<const Scan>> PreparedScan::Full() const {
   if (scan) return std::shared_ptr<const Scan>(std::shared_ptr<const Scan>(), scan);

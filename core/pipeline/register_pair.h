@@ -57,13 +57,6 @@ struct PreparedScan {
   Expected<std::shared_ptr<const Scan>> Full() const;
 };
 
-// Whether this pose puts two panoramic stations on one spot: nearer than a fifth of the nearer
-// one's median range. Measured on office floors: a plan-view pose put a corridor station on another's
-// spot 0.03-0.17 of it away, turned 180°; neighbouring street stations 3 m apart are 0.19 of it, and
-// consecutive KITTI Velodyne sweeps 0.05-0.11 (mobile lidar: feature-supported links, where this is
-// not asked).
-bool SameSpot(const PreparedScan& parent, const PreparedScan& child, const Eigen::Isometry3d& parent_from_child);
-
 // Sets name, scan and angular step from a scan the caller keeps (and forgets any surface).
 void HoldScan(const Scan& scan, PreparedScan* prepared);
 

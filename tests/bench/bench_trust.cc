@@ -34,7 +34,7 @@ struct PairCounts {
 
 PairCounts CountPairs(const std::vector<Scan>& scans, const std::vector<Eigen::Isometry3d>& world,
                       const std::vector<bool>& registered, double within_m = 0.002, double within_deg = 0.5,
-                      double wrong_m = 0.01, double wrong_deg = 2.0, double within_m_per_step = 0.0) {
+                      double wrong_m = 0.01, double wrong_deg = 2.0, const test::RealSet* set = nullptr) {
   PairCounts c;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     c.registered += registered[i];
@@ -43,7 +43,7 @@ PairCounts CountPairs(const std::vector<Scan>& scans, const std::vector<Eigen::I
       const PoseError e = ComparePoses(world[i].inverse() * world[j], scans[i].reference_world_from_scan->inverse() *
                                                                          *scans[j].reference_world_from_scan);
       ++c.pairs;
-      c.within += e.position_m <= within_m + within_m_per_step * double(j - i - 1) && e.angle_rad <= within_deg / kDeg;
+      c.within += e.position_m <= (set ? set->WithinM(i, j) : within_m) && e.angle_rad <= within_deg / kDeg;
       c.wrong += e.position_m > wrong_m || e.angle_rad > wrong_deg / kDeg;
     }
   }
@@ -142,8 +142,7 @@ void RunTrustBenchSet(Table& table, const std::string& name, Expected<test::Real
   const int n = static_cast<int>(set->scans.size());
   const auto count = [&](const std::vector<Scan>& scans, const std::vector<Eigen::Isometry3d>& world,
                          const std::vector<bool>& registered) {
-    return CountPairs(scans, world, registered, set->within_m, set->within_deg, set->wrong_m, set->wrong_deg,
-                      set->within_m_per_step);
+    return CountPairs(scans, world, registered, set->within_m, set->within_deg, set->wrong_m, set->wrong_deg, &*set);
   };
   auto describe = [&](const PairCounts& c) {
     return Fmt("of %.0f pairs within ", c.pairs) + Fmt("%.0f mm", 1e3 * set->within_m) +
