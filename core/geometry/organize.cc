@@ -132,6 +132,7 @@ Expected<Scan> CloudProjection::Organize(const std::vector<float>& reflectance, 
   Scan scan;
   Expected<std::size_t> kept = Place(options, reflectance, std::move(name), &scan);
   if (!kept) return kept.error();
+  scan.grid_from_file = false;  // built here from a list of points
   return scan;
 }
 

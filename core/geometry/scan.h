@@ -36,6 +36,9 @@ struct Scan {
   AngularGrid angles;
   Eigen::Isometry3d world_from_scan = Eigen::Isometry3d::Identity();
   std::optional<Eigen::Isometry3d> reference_world_from_scan;  // ground truth / survey control
+  // The grid came with the file (a scanner's own range image: PTX, structured E57, an organized PCD);
+  // false when it was organized here from a list of points (mobile lidar, merged clouds).
+  bool grid_from_file = true;
 
   Scan() = default;
   Scan(std::string scan_name, int num_rows, int num_cols);

@@ -16,7 +16,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
-constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersion = 3;  // 3: grid_from_file
 constexpr std::size_t kFixedHeader = 8 + 4 + 4 + 8;
 constexpr std::uint32_t kMaxScans = 1u << 20;
 // The header: the fixed part, n + 1 offsets, its checksum.
@@ -146,6 +146,7 @@ void PutRecord(std::string& out, const Scan& s) {
   PutPose(out, s.world_from_scan);
   Put(out, static_cast<std::uint8_t>(s.reference_world_from_scan.has_value()));
   if (s.reference_world_from_scan) PutPose(out, *s.reference_world_from_scan);
+  Put(out, static_cast<std::uint8_t>(s.grid_from_file));
   Put(out, static_cast<std::uint32_t>(s.angles.azimuth.size()));
   PutBytes(out, s.angles.azimuth.data(), s.angles.azimuth.size() * sizeof(float));
   Put(out, static_cast<std::uint32_t>(s.angles.elevation.size()));
@@ -157,7 +158,7 @@ void PutRecord(std::string& out, const Scan& s) {
 }
 
 std::size_t RecordBytes(const Scan& s) {
-  return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 4 +
+  return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 1 + 4 +
          4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 8;
 }
 
@@ -186,6 +187,7 @@ Expected<Scan> ParseRecord(const std::string& bytes, std::size_t begin, std::siz
     ref.matrix() = m;
     s.reference_world_from_scan = ref;
   }
+  s.grid_from_file = r.Get<std::uint8_t>() != 0;
   const std::uint32_t az = r.Get<std::uint32_t>();
   if (!r.ok || (az != 0 && az != static_cast<std::uint32_t>(cols))) return Bad("corrupt angles");
   s.angles.azimuth.resize(az);

@@ -34,6 +34,7 @@ class PairBook {
 
   bool Has(int parent, int child) const { return done_.count({parent, child}) > 0; }
   PairResult& At(int parent, int child) { return done_.at({parent, child}); }
+  const PairResult& At(int parent, int child) const { return done_.at({parent, child}); }
   const PairResult* Find(int parent, int child) const;
   bool Excluded(int parent, int child) const;
   const std::vector<std::pair<int, int>>& excluded() const { return excluded_; }

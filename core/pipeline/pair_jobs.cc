@@ -64,7 +64,8 @@ json PairResultToJson(const PairResult& r) {
           {"coarse_ok", r.coarse_ok},
           {"coarse_inlier_matches", r.coarse_inlier_matches},
           {"needs_loop", r.needs_loop},
-          {"needs_loop_if_checkable", r.needs_loop_if_checkable}};
+          {"needs_loop_if_checkable", r.needs_loop_if_checkable},
+          {"same_spot", r.same_spot}};
 }
 
 Expected<PairResult> PairResultFromJson(const json& j, const std::string& where) {
@@ -82,6 +83,7 @@ Expected<PairResult> PairResultFromJson(const json& j, const std::string& where)
     r.coarse_inlier_matches = j.at("coarse_inlier_matches").get<std::vector<int>>();
     r.needs_loop = j.at("needs_loop").get<bool>();
     r.needs_loop_if_checkable = j.value("needs_loop_if_checkable", false);
+    r.same_spot = j.value("same_spot", false);
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, where + ": " + e.what());
   }

@@ -37,7 +37,7 @@ struct PreparedScan {
   double angular_step = 0.0;    // the grid's angular spacing (radians; 0 when unknown)
   GeometricFeatures geometric;  // FPFH (empty when not used)
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
-  bool panoramic = false;       // a full-circle grid: a tripod station that sees all round
+  bool panoramic = false;       // a full-circle grid from its file: a tripod station that sees all round
   double median_range_m = 0.0;  // of the samples, from the scanner
   // Valid points voxel-downsampled at the dense ICP voxel, scanner frame, in single precision (kept
   // for the whole run: 12 bytes a sample; ToDouble for use).
@@ -75,6 +75,8 @@ struct PairResult {
   // Evidence against the pose (a weak link with static free-space conflicts): the same, but only
   // when the child has another neighbour to close a loop through — a lone pair stays weak.
   bool needs_loop_if_checkable = false;
+  // The pose puts both scanners on one spot (SameSpot): the two scans look alike from there.
+  bool same_spot = false;
   bool NeedsLoop() const { return needs_loop || needs_loop_if_checkable; }
 };
 
