@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "app/cli_commands.h"
+#include "core/common/allocator.h"
 
 namespace {
 
@@ -19,6 +20,7 @@ void PrintUsage(std::FILE* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  scanreg::ReuseFreedMemory();
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     PrintUsage(stdout);

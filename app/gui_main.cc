@@ -15,12 +15,14 @@
 
 #include <cstdio>
 
+#include "core/common/allocator.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
 #include "ui/merge_panel.h"
 #include "ui/screenshot_tour.h"
 
 int main(int argc, char** argv) {
+  scanreg::ReuseFreedMemory();
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   QApplication::setApplicationName("scanreg");

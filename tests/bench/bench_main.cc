@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/common/allocator.h"
 #include "tests/bench/bench_table.h"
 #include "tests/bench/pcl_baseline.h"
 
@@ -34,6 +35,7 @@ void ResetPeakMemory() { std::ofstream("/proc/self/clear_refs") << "5"; }
 }  // namespace scanreg::bench
 
 int main(int argc, char** argv) {
+  scanreg::ReuseFreedMemory();
   // The K-4PCS baseline's child process (pcl_baseline.h).
   if (argc == 6 && std::strcmp(argv[1], "--kfpcs-child") == 0)
     return scanreg::bench::RunKfpcsChild(argv[2], argv[3], std::atof(argv[4]), std::atoi(argv[5]));
