@@ -8,7 +8,6 @@
 #include <fstream>
 
 #include "core/io/organize_default.h"
-#include "core/io/text_parse.h"
 
 namespace scanreg::io {
 namespace {
@@ -38,6 +37,20 @@ int LasMinimumRecordLength(int point_format) {
   return point_format >= 0 && point_format <= 10 ? kLength[point_format] : 0;
 }
 
+int LasGpsTimeOffset(int point_format) {
+  if (point_format == 1 || (point_format >= 3 && point_format <= 5)) return 20;
+  return point_format >= 6 && point_format <= 10 ? 22 : -1;
+}
+
+int LasRgbOffset(int point_format) {
+  switch (point_format) {
+    case 2: return 20;
+    case 3: case 5: return 28;
+    case 7: case 8: case 10: return 30;
+    default: return -1;
+  }
+}
+
 Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel) {
   const std::string name = path.string();
   const auto bad = [&](const std::string& what) {
@@ -48,10 +61,6 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
   if (ec) return MakeError(ErrorCode::kIoError, name + ": cannot read the file size: " + ec.message());
   std::ifstream in(path, std::ios::binary);
   if (!in) return MakeError(ErrorCode::kIoError, name + ": cannot open the file; check that it exists and is readable");
-  if (LowerExtension(path) == ".laz") {
-    return MakeError(ErrorCode::kUnsupported, name + ": a LAZ (compressed LAS) file; decompress it first, e.g. "
-                                                     "`laszip -i FILE.laz -o FILE.las` or `pdal translate FILE.laz FILE.las`");
-  }
   if (file_size < static_cast<std::uintmax_t>(kHeaderSize12)) {
     return bad("only " + std::to_string(file_size) + " bytes: shorter than a LAS header (227 bytes); the file is "
                "truncated or not LAS");
@@ -144,9 +153,12 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
                "-byte records: truncated (copy it again)");
   }
 
+  const int gps_at = LasGpsTimeOffset(out.point_format), rgb_at = LasRgbOffset(out.point_format);
   try {
     out.xyz.resize(count);
     out.intensity.resize(count);
+    out.gps_time.resize(gps_at >= 0 ? count : 0);
+    out.rgb.resize(rgb_at >= 0 ? count : 0);
   } catch (const std::bad_alloc&) {
     return MakeError(ErrorCode::kIoError, name + ": " + std::to_string(count) +
                                               " points do not fit in memory; split the file (e.g. with las2las or pdal "
@@ -175,6 +187,9 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
                    "header's scale factors are damaged");
       }
       out.intensity[first + k] = Get<std::uint16_t>(buffer, at + 12);
+      if (gps_at >= 0) out.gps_time[first + k] = Get<double>(buffer, at + gps_at);
+      if (rgb_at >= 0)
+        for (int c = 0; c < 3; ++c) out.rgb[first + k][c] = Get<std::uint16_t>(buffer, at + rgb_at + 2 * c);
     }
     progress.Report(double(first + n) / double(count), stage);
   }

@@ -1,7 +1,7 @@
 // ASPRS LAS input, versions 1.0-1.4, point data record formats 0-10 (issue 34, item 4): what
-// mobile mappers, handheld SLAM scanners and other programs export. Uncompressed only (a LAZ file,
-// or a LAS whose format byte carries LASzip's compression bits, gets an error that says how to
-// decompress it).
+// mobile mappers, handheld SLAM scanners and other programs export. Uncompressed only: a file whose
+// format byte carries LASzip's compression bits gets an error that says how to decompress it (an
+// uncompressed file named .laz is read as what it is).
 //
 // Coordinates are X * scale + offset in double precision, as the specification defines them, so a
 // cloud in UTM (hundreds of kilometres from the origin) keeps its millimetres. Records longer than
@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -32,10 +33,20 @@ struct LasPoints {
   Eigen::Vector3d header_min = Eigen::Vector3d::Zero(), header_max = Eigen::Vector3d::Zero();  // as written
   std::vector<Eigen::Vector3d> xyz;     // world coordinates, metres (or the file's units)
   std::vector<std::uint16_t> intensity;  // one per point, as stored
+  // Per point where the format has them (empty otherwise), as stored: GPS time (formats 1 and 3-10;
+  // GPS week seconds or adjusted standard GPS time, as the header's global encoding says) and red,
+  // green, blue (formats 2, 3, 5, 7, 8, 10; 16 bits a channel). A Scan keeps intensity only (its
+  // grid model has no colour or time yet: issue 34, item 1).
+  std::vector<double> gps_time;
+  std::vector<std::array<std::uint16_t, 3>> rgb;
 };
 
 // The minimum record length of a point data format (0-10); 0 for an unknown format.
 int LasMinimumRecordLength(int point_format);
+// Where a format's GPS time (double) and RGB (3 x uint16) start in its records (LAS 1.4 R15, tables
+// 7-17); -1 when the format has none.
+int LasGpsTimeOffset(int point_format);
+int LasRgbOffset(int point_format);
 
 Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel);
 
