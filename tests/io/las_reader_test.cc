@@ -130,8 +130,12 @@ TEST(LasReader, ThePermutationFilesOfLibLasGiveThePointPdalExpects) {
     const int format = file[4] - '0';
     ASSERT_EQ(las.gps_time.size(), format == 1 || format == 3 ? 1u : 0u);
     ASSERT_EQ(las.rgb.size(), format >= 2 ? 1u : 0u);
-    if (!las.gps_time.empty()) EXPECT_EQ(las.gps_time[0], 1205902800.0);
-    if (!las.rgb.empty()) EXPECT_EQ(las.rgb[0], (std::array<std::uint16_t, 3>{255, 12, 234}));
+    if (!las.gps_time.empty()) {
+      EXPECT_EQ(las.gps_time[0], 1205902800.0);
+    }
+    if (!las.rgb.empty()) {
+      EXPECT_EQ(las.rgb[0], (std::array<std::uint16_t, 3>{255, 12, 234}));
+    }
   }
 }
 
