@@ -37,7 +37,7 @@ int RunConvert(const std::vector<std::string>& argv) {
   if (!scans) return Fail(scans.error());
   if (Status s = io::WriteScanFile(out, *scans, progress, cancel); !s) return Fail(s.error());
   std::size_t points = 0;
-  for (const Scan& s : *scans) points += s.CountValid();
+  for (const Scan& s : *scans) points += s.CountPoints();
   std::printf("converted %zu scan(s), %zu points: %s -> %s\n", scans->size(), points, in.c_str(), out.c_str());
   return 0;
 }

@@ -79,7 +79,7 @@ int RunInfo(const std::vector<std::string>& argv) {
   for (std::size_t i = 0; i < scans->size(); ++i) {
     const Scan& s = (*scans)[i];
     const io::ProjectScan& ps = project->scans[i];
-    const std::size_t valid = s.CountValid();
+    const std::size_t valid = s.CountValid();  // the grid's; the points column counts the list's too
     const Eigen::Isometry3d& t = ps.world_from_scan;
     const double yaw = std::atan2(t.linear()(1, 0), t.linear()(0, 0)) * 180.0 / M_PI;
     std::string reference = "-";
@@ -92,7 +92,7 @@ int RunInfo(const std::vector<std::string>& argv) {
     }
     const std::string size = std::to_string(s.cols) + "x" + std::to_string(s.rows);
     std::printf("%-12s %-24s %11s %8.1f %11zu  %-12s %10.3f %10.3f %10.3f %8.2f %s\n", s.name.c_str(),
-                ps.path.filename().string().c_str(), size.c_str(), s.size() ? 100.0 * valid / s.size() : 0.0, valid,
+                ps.path.filename().string().c_str(), size.c_str(), s.size() ? 100.0 * valid / s.size() : 0.0, s.CountPoints(),
                 io::PoseStateName(io::ScanPoseState(ps)), t.translation().x(), t.translation().y(), t.translation().z(),
                 yaw, reference.c_str());
   }

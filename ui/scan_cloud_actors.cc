@@ -31,17 +31,19 @@ std::uint64_t MixIndex(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// About one valid point in `step`, spread without a pattern (every step-th cell of the row-major
-// grid would draw stripes), at most max_points; every valid point when max_points is 0.
+// About one point in `step`, spread without a pattern (every step-th cell of the row-major grid
+// would draw stripes), at most max_points; every point when max_points is 0. Indices below
+// scan.size() are grid cells, the others scan.size() + the index of a list point.
 std::vector<std::size_t> SampleCells(const Scan& scan, std::size_t max_points) {
-  const std::size_t valid = scan.CountValid();
+  const std::size_t valid = scan.CountPoints();
   // 3 % fewer than the budget on average, so that the random count stays below it.
   const double keep = max_points == 0 ? 1.0 : std::min(1.0, 0.97 * max_points / std::max<double>(1.0, valid));
   const std::uint64_t threshold = keep >= 1.0 ? ~0ULL : static_cast<std::uint64_t>(keep * 18446744073709551615.0);
   std::vector<std::size_t> cells;
   cells.reserve(static_cast<std::size_t>(keep * valid) + 16);
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!scan.valid[i] || MixIndex(i) > threshold) continue;
+  const std::size_t all = scan.size() + scan.list_points.size();
+  for (std::size_t i = 0; i < all; ++i) {
+    if ((i < scan.size() && !scan.valid[i]) || MixIndex(i) > threshold) continue;
     if (max_points != 0 && cells.size() == max_points) break;
     cells.push_back(i);
   }
@@ -65,11 +67,14 @@ vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen
   const Eigen::Isometry3d shifted = Eigen::Translation3d(-origin) * pose;
   for (std::size_t out = 0; out < n; ++out) {
     const std::size_t i = cells[out];
-    const Eigen::Vector3d q = shifted * scan.points[i].cast<double>();
+    const bool on_grid = i < scan.size();
+    const Eigen::Vector3f& point = on_grid ? scan.points[i] : scan.list_points[i - scan.size()];
+    const float reflectance = on_grid ? scan.reflectance[i] : scan.list_reflectance[i - scan.size()];
+    const Eigen::Vector3d q = shifted * point.cast<double>();
     for (int d = 0; d < 3; ++d) p[3 * out + d] = static_cast<float>(q[d]);
     for (int d = 0; d < 3; ++d) {
       c[3 * out + d] = colouring == CloudColouring::kReflectance
-                           ? static_cast<unsigned char>(std::clamp(scan.reflectance[i], 0.0f, 1.0f) * 255)
+                           ? static_cast<unsigned char>(std::clamp(reflectance, 0.0f, 1.0f) * 255)
                            : static_cast<unsigned char>(rgb[d] * 255);
     }
   }

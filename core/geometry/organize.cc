@@ -218,6 +218,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
   row_of = std::vector<std::int32_t>();
 
   const double ray_tolerance = 0.01 * az_step;
+  std::vector<std::uint8_t> in_grid(out ? points_->size() : 0, 0);
   std::size_t kept = 0;
   std::vector<Placed> placed;
   for (int r = 0; r < rows; ++r) {
@@ -228,6 +229,16 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
     for (const Placed& pl : placed) {
       const std::uint32_t i = pl.point->index;
       out->Set(r, pl.col, (*points_)[i], reflectance.empty() ? 0.5f : reflectance[i]);
+      in_grid[i] = 1;
+    }
+  }
+  if (out) {  // every usable point without a cell stays, as a list, in input order
+    std::vector<std::uint8_t> usable(points_->size(), 0);
+    for (const Dir& d : dirs_) usable[d.index] = 1;
+    for (std::size_t i = 0; i < points_->size(); ++i) {
+      if (!usable[i] || in_grid[i]) continue;
+      out->list_points.push_back((*points_)[i]);
+      out->list_reflectance.push_back(reflectance.empty() ? 0.5f : reflectance[i]);
     }
   }
   return kept;

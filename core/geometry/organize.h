@@ -67,9 +67,10 @@ class CloudProjection {
 
 // points are in the scanner frame (subtract the scanner origin first). When two points compete
 // for one cell and no free cell is within max_column_shift columns (or they lie on one ray), the
-// nearer one (the first return) is kept. Row 0 is the highest elevation; column 0 starts at
+// nearer one (the first return) takes the cell and the other joins the scan's list_points, as
+// does every point outside a partial grid: no usable point is lost. Row 0 is the highest elevation; column 0 starts at
 // azimuth_start_rad (column azimuths increase from there and may exceed pi for a partial span).
-// Every kept point is an input point, unchanged. Non-finite points and points at the origin are
+// Every point is an input point, unchanged. Non-finite points and points at the origin are
 // skipped. reflectance may be empty (then 0.5).
 Expected<Scan> OrganizeCloud(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                              const OrganizeOptions& options, std::string name);

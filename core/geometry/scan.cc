@@ -54,6 +54,16 @@ Status Scan::Validate() const {
                           angles.elevation.size() != static_cast<std::size_t>(rows))) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': angular grid does not match its size");
   }
+  if (list_reflectance.size() != list_points.size()) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "scan '" + name + "': its listed points and their reflectance differ in number");
+  }
+  for (std::size_t i = 0; i < list_points.size(); ++i) {
+    if (!list_points[i].allFinite() || !std::isfinite(list_reflectance[i])) {
+      return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': listed point " + std::to_string(i + 1) +
+                                                        " (off the grid) holds a NaN or infinite value");
+    }
+  }
   for (std::size_t i = 0; i < n; ++i) {
     if (valid[i] && (!points[i].allFinite() || !std::isfinite(reflectance[i]))) {
       return MakeError(ErrorCode::kInvalidArgument,

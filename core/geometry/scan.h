@@ -39,6 +39,15 @@ struct Scan {
   // The grid came with the file (a scanner's own range image: PTX, structured E57, an organized PCD);
   // false when it was organized here from a list of points (mobile lidar, merged clouds).
   bool grid_from_file = true;
+  // Points the grid has no cell for, kept as a list in the scanner frame: a cloud seen from more
+  // than one place (a merged or mobile-mapping cloud) organized around its origin leaves out the
+  // points that share a cell with a nearer one. Never dropped: they are counted, exported and drawn
+  // with the grid's points (ForEachPoint); the steps that need a range image use the grid.
+  std::vector<Eigen::Vector3f> list_points;
+  std::vector<float> list_reflectance;  // one per list point
+  // The grid's points were all seen from the scanner origin. False for a cloud seen from several
+  // places: its grid is only an index, and no evidence is drawn from free space "seen" from it.
+  bool single_viewpoint = true;
 
   Scan() = default;
   Scan(std::string scan_name, int num_rows, int num_cols);
@@ -51,7 +60,15 @@ struct Scan {
   void Set(int row, int col, const Eigen::Vector3f& p, float refl);
   void Clear(int row, int col);
 
-  std::size_t CountValid() const;
+  std::size_t CountValid() const;  // the grid's points
+  std::size_t CountPoints() const { return CountValid() + list_points.size(); }  // every point
+  // Visits every point, the grid's valid cells first (row-major), then the list: f(point, reflectance).
+  template <typename F>
+  void ForEachPoint(F&& f) const {
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (valid[i]) f(points[i], reflectance[i]);
+    for (std::size_t i = 0; i < list_points.size(); ++i) f(list_points[i], list_reflectance[i]);
+  }
   // Unit line of sight of a cell, scanner frame: from the angular grid when known, else the
   // direction to the cell's point (zero vector for an empty cell without angles).
   Eigen::Vector3f LineOfSight(int row, int col) const;

@@ -130,10 +130,14 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
     if (!records.valid[i]) continue;
     const int r = int(records.row[i] - row_min), c = int(records.column[i] - col_min);
-    if (scan.IsValid(r, c)) continue;  // keep the first point of a cell
     const float refl = records.intensity.empty() ? 0.5f
                        : scale > 0.0             ? float((records.intensity[i] - intensity_range.first) * scale)
                                                  : 0.5f;
+    if (scan.IsValid(r, c)) {  // the first point of a cell takes it; later returns stay as a list
+      scan.list_points.push_back(records.xyz[i]);
+      scan.list_reflectance.push_back(refl);
+      continue;
+    }
     scan.Set(r, c, records.xyz[i], refl);
   }
   EstimateAngularGrid(scan);

@@ -3,8 +3,8 @@
 // column c - columnMinimum. Scans without a grid are organized like PLY/PCD clouds
 // (OrganizeCloudByDensity). Intensity, normalised to [0, 1] with the scan's intensityLimits (or
 // the field's limits), becomes reflectance; without intensity reflectance is 0.5. The pose
-// becomes world_from_scan. Points with a non-zero cartesian/sphericalInvalidState, and returns
-// after the first, are left out.
+// becomes world_from_scan. Points with a non-zero cartesian/sphericalInvalidState are left out;
+// a later point of a grid cell (a second return) joins the scan's list_points.
 #pragma once
 
 #include <cstdint>

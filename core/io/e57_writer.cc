@@ -21,7 +21,6 @@ namespace {
 
 constexpr std::size_t kRecordsPerPacket = 2048;  // a multiple of 8: every packet ends on a byte
 constexpr std::size_t kPacketsPerReport = 25;    // progress every ~51k points
-constexpr int kStreams = 6;                      // x, y, z, intensity, rowIndex, columnIndex
 constexpr double kGpsEpochUnix = 315964800.0;    // 1980-01-06 in Unix seconds
 constexpr double kGpsLeapSeconds = 18.0;
 
@@ -29,14 +28,18 @@ constexpr double kGpsLeapSeconds = 18.0;
 struct WrittenScan {
   std::uint64_t section_offset = 0;  // physical
   std::uint64_t records = 0;
+  bool structured = true;  // rowIndex/columnIndex written: the scan has no point off its grid
   int row_bits = 0, col_bits = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
   double intensity_lo = 0.0, intensity_hi = 1.0;
 };
 
-std::uint64_t PacketLength(std::size_t records, int row_bits, int col_bits) {
-  const std::uint64_t bytes =
-      6 + 2 * kStreams + 4 * 4 * records + (records * row_bits + 7) / 8 + (records * col_bits + 7) / 8;
+// x, y, z, intensity, and rowIndex, columnIndex when structured.
+int Streams(bool structured) { return structured ? 6 : 4; }
+
+std::uint64_t PacketLength(std::size_t records, bool structured, int row_bits, int col_bits) {
+  const std::uint64_t index_bytes = structured ? (records * row_bits + 7) / 8 + (records * col_bits + 7) / 8 : 0;
+  const std::uint64_t bytes = 6 + 2 * Streams(structured) + 4 * 4 * records + index_bytes;
   return (bytes + 3) / 4 * 4;
 }
 
@@ -58,12 +61,15 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   cells.reserve(scan.CountValid());
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) cells.push_back(i);
-  info->records = cells.size();
+  info->structured = scan.list_points.empty();
+  info->records = cells.size() + scan.list_points.size();
   info->row_bits = e57::BitWidth(0, scan.rows - 1);
   info->col_bits = e57::BitWidth(0, scan.cols - 1);
   std::uint64_t section_length = e57::kSectionHeaderSize;
-  for (std::size_t b = 0; b < cells.size(); b += kRecordsPerPacket)
-    section_length += PacketLength(std::min(kRecordsPerPacket, cells.size() - b), info->row_bits, info->col_bits);
+  for (std::size_t b = 0; b < info->records; b += kRecordsPerPacket) {
+    section_length +=
+        PacketLength(std::min<std::size_t>(kRecordsPerPacket, info->records - b), info->structured, info->row_bits, info->col_bits);
+  }
 
   if (Status s = w.Align(8); !s) return s;
   info->section_offset = w.physical_offset();
@@ -76,37 +82,41 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   if (Status s = w.Append(header); !s) return s;
 
   float ilo = 0.0f, ihi = 1.0f;
-  info->lo = Eigen::Vector3d::Constant(cells.empty() ? 0.0 : 1e300);
-  info->hi = Eigen::Vector3d::Constant(cells.empty() ? 0.0 : -1e300);
+  info->lo = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : 1e300);
+  info->hi = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : -1e300);
   std::string streams[4], packet;
-  for (std::size_t b = 0; b < cells.size(); b += kRecordsPerPacket) {
+  for (std::size_t b = 0; b < info->records; b += kRecordsPerPacket) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, target + ": writing cancelled");
     if ((b / kRecordsPerPacket) % kPacketsPerReport == 0) {
       progress.Report(double(*done) / double(std::max<std::size_t>(1, total)), "writing " + scan.name);
     }
-    const std::size_t n = std::min(kRecordsPerPacket, cells.size() - b);
+    const std::size_t n = std::min<std::size_t>(kRecordsPerPacket, info->records - b);
     e57::BitWriter rows, cols;
     for (std::string& s : streams) s.clear();
-    for (std::size_t k = b; k < b + n; ++k) {
-      const std::size_t i = cells[k];
-      const Eigen::Vector3f& p = scan.points[i];
+    for (std::size_t k = b; k < b + n; ++k) {  // the grid's points, then the list's
+      const bool on_grid = k < cells.size();
+      const Eigen::Vector3f& p = on_grid ? scan.points[cells[k]] : scan.list_points[k - cells.size()];
+      const float refl = on_grid ? scan.reflectance[cells[k]] : scan.list_reflectance[k - cells.size()];
       for (int d = 0; d < 3; ++d) PutFloat(streams[d], p[d]);
-      PutFloat(streams[3], scan.reflectance[i]);
-      ilo = std::min(ilo, scan.reflectance[i]), ihi = std::max(ihi, scan.reflectance[i]);
+      PutFloat(streams[3], refl);
+      ilo = std::min(ilo, refl), ihi = std::max(ihi, refl);
       info->lo = info->lo.cwiseMin(p.cast<double>()), info->hi = info->hi.cwiseMax(p.cast<double>());
-      rows.Write(std::uint64_t(i / scan.cols), info->row_bits);
-      cols.Write(std::uint64_t(i % scan.cols), info->col_bits);
+      if (!info->structured) continue;
+      rows.Write(std::uint64_t(cells[k] / scan.cols), info->row_bits);
+      cols.Write(std::uint64_t(cells[k] % scan.cols), info->col_bits);
     }
     const std::string row_bytes = rows.Take(true), col_bytes = cols.Take(true);
-    const std::uint64_t length = PacketLength(n, info->row_bits, info->col_bits);
+    const std::uint64_t length = PacketLength(n, info->structured, info->row_bits, info->col_bits);
     packet.clear();
     packet.push_back(static_cast<char>(e57::kDataPacket));
     packet.push_back('\0');
     PutLe(packet, length - 1, 2);
-    PutLe(packet, kStreams, 2);
+    PutLe(packet, Streams(info->structured), 2);
     for (const std::string& s : streams) PutLe(packet, s.size(), 2);
-    PutLe(packet, row_bytes.size(), 2);
-    PutLe(packet, col_bytes.size(), 2);
+    if (info->structured) {
+      PutLe(packet, row_bytes.size(), 2);
+      PutLe(packet, col_bytes.size(), 2);
+    }
     for (const std::string& s : streams) packet += s;
     packet += row_bytes;
     packet += col_bytes;
@@ -168,10 +178,12 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
   FloatElement(rotation, "y", q.y()), FloatElement(rotation, "z", q.z());
   pugi::xml_node translation = Element(pose, "translation", "Structure");
   FloatElement(translation, "x", t.x()), FloatElement(translation, "y", t.y()), FloatElement(translation, "z", t.z());
-  pugi::xml_node bounds = Element(child, "indexBounds", "Structure");
-  IntegerElement(bounds, "rowMinimum", 0), IntegerElement(bounds, "rowMaximum", scan.rows - 1);
-  IntegerElement(bounds, "columnMinimum", 0), IntegerElement(bounds, "columnMaximum", scan.cols - 1);
-  IntegerElement(bounds, "returnMinimum", 0), IntegerElement(bounds, "returnMaximum", 0);
+  if (info.structured) {
+    pugi::xml_node bounds = Element(child, "indexBounds", "Structure");
+    IntegerElement(bounds, "rowMinimum", 0), IntegerElement(bounds, "rowMaximum", scan.rows - 1);
+    IntegerElement(bounds, "columnMinimum", 0), IntegerElement(bounds, "columnMaximum", scan.cols - 1);
+    IntegerElement(bounds, "returnMinimum", 0), IntegerElement(bounds, "returnMaximum", 0);
+  }
   pugi::xml_node limits = Element(child, "intensityLimits", "Structure");
   FloatElement(limits, "intensityMinimum", info.intensity_lo);
   FloatElement(limits, "intensityMaximum", info.intensity_hi);
@@ -185,8 +197,10 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
   for (const char* name : {"cartesianX", "cartesianY", "cartesianZ", "intensity"}) {
     Element(prototype, name, "Float").append_attribute("precision") = "single";
   }
-  PrototypeInteger(prototype, "rowIndex", scan.rows - 1);
-  PrototypeInteger(prototype, "columnIndex", scan.cols - 1);
+  if (info.structured) {
+    PrototypeInteger(prototype, "rowIndex", scan.rows - 1);
+    PrototypeInteger(prototype, "columnIndex", scan.cols - 1);
+  }
   Element(points, "codecs", "Vector").append_attribute("allowHeterogeneousChildren") = "1";
 }
 
@@ -230,7 +244,7 @@ Status WriteE57(const std::filesystem::path& path, const std::vector<Scan>& scan
       return MakeError(ErrorCode::kInvalidArgument,
                        target + ": scan '" + scan.name + "' has an empty grid; E57 needs rows and columns");
     }
-    total += scan.CountValid();
+    total += scan.CountPoints();
   }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;

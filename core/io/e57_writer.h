@@ -1,6 +1,8 @@
 // Writing E57 (ASTM E2807) files that keep what registration needs: every scan with its full
 // double pose (rotation quaternion + translation), its grid (rowIndex/columnIndex with
-// indexBounds) and its reflectance (intensity with intensityLimits 0..1).
+// indexBounds) and its reflectance (intensity with intensityLimits 0..1). A scan with points off
+// its grid (list_points) is written unstructured — every point, no rowIndex/columnIndex — since an
+// E57 scan's records are either all indexed or none.
 //
 // Encoding: only valid cells are stored. cartesianX/Y/Z and intensity are Float single: the
 // Scan's own float values, so a round trip is exact and no bounds or scale must be chosen

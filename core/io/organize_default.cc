@@ -394,15 +394,22 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
   Log(LogLevel::kDebug, "organizing '" + source + "': " + Thousands(best_kept) + " of " + Thousands(usable) +
                             " points kept in a " + std::to_string(scan->rows) + " x " + std::to_string(scan->cols) +
                             (is_rings ? " grid, one row per ring" : " uniform grid"));
+  // Seen from one place, (nearly) every distinct point has a cell of its own; a cloud whose points
+  // crowd each other's cells was seen from several places, and its origin is no viewpoint.
+  scan->single_viewpoint = double(best_kept) >= kRingsKept * double(distinct);
   if (best_kept < usable) {
-    const std::size_t left_out = usable - best_kept;
-    const std::size_t conflicts = left_out - std::min(left_out, repeated);
-    std::string message =
-        "organizing '" + source + "': " + Thousands(left_out) + " of " + Thousands(usable) + " points were left out: ";
-    if (conflicts > 0) message += Thousands(conflicts) + " share a grid cell with a nearer point";
-    if (conflicts > 0 && repeated > 0) message += " and ";
+    const std::size_t off_grid = usable - best_kept;
+    const std::size_t conflicts = off_grid - std::min(off_grid, repeated);
+    std::string message = "organizing '" + source + "': " + Thousands(off_grid) + " of " + Thousands(usable) +
+                          " points have no cell of the scan grid (";
+    if (conflicts > 0) message += Thousands(conflicts) + " share a cell with a nearer point";
+    if (conflicts > 0 && repeated > 0) message += ", ";
     if (repeated > 0) message += Thousands(repeated) + " repeat another point exactly";
-    LogWarning(message);
+    message += "); they are kept as a list and exported with the others, the registration uses the grid";
+    if (!scan->single_viewpoint)
+      message += "; the cloud was not seen from one place, so no link is judged on free space seen from its origin";
+    if (scan->single_viewpoint) Log(LogLevel::kInfo, message);
+    else LogWarning(message);
   }
   return scan;
 }

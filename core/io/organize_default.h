@@ -23,7 +23,9 @@ namespace scanreg::io {
 //     the one that keeps most.
 // A point whose cell is taken may move to a free cell of its row nearby (same azimuth order). No
 // grid has more than 4 cells per point; columns cover only the data's azimuth range when it is
-// under half a turn. Points left out are reported by LogWarning with their count. `source` names
+// under half a turn. Points without a cell stay in the scan's list_points (reported with their
+// count); when more than 1 % of the distinct points have none, the cloud was not seen from one
+// place: single_viewpoint is false and a warning says so. `source` names
 // the file (or file and scan) in messages. Error when the cloud has no usable point, or when no
 // grid within the cell budget keeps half of its points (not a scan seen from the origin).
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,

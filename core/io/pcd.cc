@@ -113,9 +113,19 @@ Status WritePcd(const std::filesystem::path& path, const Scan& scan, ProgressSin
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, path.string() + ": writing cancelled");
   const std::string stage = "writing " + path.filename().string();
   progress.Report(0.0, stage);
-  pcl::PointCloud<pcl::PointXYZI> cloud(static_cast<std::uint32_t>(scan.cols), static_cast<std::uint32_t>(scan.rows));
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  if (!scan.list_points.empty()) {  // points off the grid: an unorganized cloud of every point
+    scan.ForEachPoint([&](const Eigen::Vector3f& q, float refl) {
+      pcl::PointXYZI p;
+      p.x = q.x(), p.y = q.y(), p.z = q.z();
+      p.intensity = refl;
+      cloud.push_back(p);
+    });
+  } else {
+    cloud = pcl::PointCloud<pcl::PointXYZI>(static_cast<std::uint32_t>(scan.cols), static_cast<std::uint32_t>(scan.rows));
+  }
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (int r = 0; r < scan.rows; ++r) {
+  for (int r = 0; r < scan.rows && scan.list_points.empty(); ++r) {
     for (int c = 0; c < scan.cols; ++c) {
       pcl::PointXYZI& p = cloud.at(c, r);
       const std::size_t i = scan.Index(r, c);

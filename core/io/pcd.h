@@ -20,7 +20,8 @@ namespace scanreg::io {
 
 Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel);
 
-// Binary organized PCD (x y z intensity, empty cells NaN); the pose goes to the viewpoint
+// Binary organized PCD (x y z intensity, empty cells NaN) — unorganized, every point, when the
+// scan has points off its grid (list_points); the pose goes to the viewpoint
 // (single precision there: PCD stores it as float). Atomic.
 Status WritePcd(const std::filesystem::path& path, const Scan& scan, ProgressSink& progress, const CancelToken& cancel);
 

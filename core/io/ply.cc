@@ -251,7 +251,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         for (int j = 0; j < static_cast<int>(count); ++j) {
           double item = 0;
           if (!cursor.Read(prop.type, &item, &status)) return status.error();
-          if (j == 0) index = item;  // several returns per cell: keep the first
+          if (j == 0) index = item;  // several returns per cell: the first takes it, the others stay as a list
         }
         if (count >= 1) {
           if (!(index >= 0 && index < double(points.size()))) {
@@ -318,6 +318,16 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         scan.Set(*rows - 1 - fr, c, points[k], intensity.empty() ? 0.5f : intensity[k]);
       }
     }
+    // Vertices no cell takes (later returns of a cell, points without a cell) stay as a list.
+    std::vector<std::uint8_t> in_grid(points.size(), 0);
+    for (int k : grid)
+      if (k >= 0) in_grid[k] = 1;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (in_grid[k] || !points[k].allFinite() || points[k].isZero()) continue;
+      if (!intensity.empty() && !std::isfinite(intensity[k])) continue;
+      scan.list_points.push_back(points[k]);
+      scan.list_reflectance.push_back(intensity.empty() ? 0.5f : intensity[k]);
+    }
     if (header->obj_info.count("scanreg_angular_grid")) EstimateAngularGrid(scan);
   } else {
     for (std::size_t k = 0; k < points.size(); ++k)
@@ -335,11 +345,19 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
                 const CancelToken& cancel) {
   if (Status s = scan.Validate(); !s) return s;
   const std::size_t n_valid = scan.CountValid();
+  if (n_valid + scan.list_points.size() > std::size_t(std::numeric_limits<std::int32_t>::max())) {
+    return MakeError(ErrorCode::kInvalidArgument, path.string() + ": more than 2^31 points do not fit one PLY range grid");
+  }
   std::string header =
       "ply\nformat binary_little_endian 1.0\ncomment written by scanreg: x y z in world coordinates (metres); "
       "scanreg_world_from_scan is the scanner's pose\n";
-  header += "obj_info num_cols " + std::to_string(scan.cols) + "\n";
-  header += "obj_info num_rows " + std::to_string(scan.rows) + "\n";
+  // Points off the grid: every point as a plain list (readers that honour a range_grid, PCL's, drop
+  // the vertices no cell names); the grid is made again when the file is read.
+  const bool grid = scan.list_points.empty();
+  if (grid) {
+    header += "obj_info num_cols " + std::to_string(scan.cols) + "\n";
+    header += "obj_info num_rows " + std::to_string(scan.rows) + "\n";
+  }
   header += "obj_info scanreg_world_from_scan";
   char buf[64];
   for (double v : RowMajorFromIsometry(scan.world_from_scan)) {
@@ -348,11 +366,11 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
     header.append(buf, e);
   }
   header += "\n";
-  if (!scan.angles.empty()) header += "obj_info scanreg_angular_grid 1\n";
+  if (grid && !scan.angles.empty()) header += "obj_info scanreg_angular_grid 1\n";
   header += "obj_info scanreg_points_in_world 1\n";
-  header += "element vertex " + std::to_string(n_valid) +
+  header += "element vertex " + std::to_string(n_valid + scan.list_points.size()) +
             "\nproperty double x\nproperty double y\nproperty double z\nproperty float intensity\n";
-  header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
+  if (grid) header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";
 
   AtomicFile file(path);
@@ -380,7 +398,16 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
       chunk.clear();
     }
   }
-  for (std::size_t k = 0; k < index.size(); ++k) {
+  for (std::size_t k = 0; k < scan.list_points.size(); ++k) {  // the points off the grid, after its own
+    const Eigen::Vector3d p = scan.world_from_scan * scan.list_points[k].cast<double>();
+    chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+    chunk.append(reinterpret_cast<const char*>(&scan.list_reflectance[k]), sizeof(float));
+    if (chunk.size() > (1 << 20)) {
+      if (Status s = file.Write(chunk); !s) return s;
+      chunk.clear();
+    }
+  }
+  for (std::size_t k = 0; grid && k < index.size(); ++k) {
     if (index[k] < 0) {
       chunk += '\0';
     } else {

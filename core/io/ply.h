@@ -23,14 +23,17 @@ namespace scanreg::io {
 // reflectance, confidence (uchar values are divided by 255, ushort by 65535; default 0.5).
 // `obj_info scanreg_world_from_scan <16 numbers, row-major>` sets the pose (identity otherwise);
 // with `obj_info scanreg_points_in_world 1` the points are in world coordinates and are taken back
-// to the scanner frame with that pose (in double).
+// to the scanner frame with that pose (in double). With a range_grid, the vertices no cell names
+// first (later returns, points without a cell) become the scan's list_points.
 Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel);
 
 // Organized binary little-endian PLY: vertex x y z (double, WORLD coordinates: world_from_scan
 // applied, so that every other reader places the points where they are registered) and intensity
 // (float) of the valid cells, range_grid in the Stanford convention, obj_info num_cols / num_rows /
-// scanreg_world_from_scan / scanreg_points_in_world 1 (and scanreg_angular_grid 1 when the scan
-// had angles; they are re-estimated on reading). Read back by ReadPly, the scan is the same (points
+// scanreg_world_from_scan / scanreg_points_in_world 1 (and scanreg_angular_grid 1 when the scan had
+// angles; they are re-estimated on reading). A scan with points off its grid (list_points) is
+// written as a plain list of every point, without range_grid (PCL's reader keeps only the vertices
+// a cell names); reading organizes it again. Read back by ReadPly, the scan is the same (points
 // in its scanner frame, the pose). Atomic.
 Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSink& progress, const CancelToken& cancel);
 

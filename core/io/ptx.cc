@@ -212,6 +212,12 @@ Status WritePtx(const std::filesystem::path& path, const std::vector<Scan>& scan
       return MakeError(ErrorCode::kInvalidArgument,
                        path.string() + ": scan '" + scan.name + "' has an empty grid; PTX needs rows and columns");
     }
+    if (!scan.list_points.empty()) {
+      return MakeError(ErrorCode::kUnsupported,
+                       path.string() + ": scan '" + scan.name + "' has " + std::to_string(scan.list_points.size()) +
+                           " points without a cell of its grid (a cloud seen from more than one place), and PTX holds a "
+                           "grid only; export it as e57, ply or las, which keep every point");
+    }
   }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;

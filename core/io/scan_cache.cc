@@ -16,7 +16,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
-constexpr std::uint32_t kVersion = 3;  // 3: grid_from_file
+constexpr std::uint32_t kVersion = 4;  // 3: grid_from_file; 4: list points, single_viewpoint
 constexpr std::size_t kFixedHeader = 8 + 4 + 4 + 8;
 constexpr std::uint32_t kMaxScans = 1u << 20;
 // The header: the fixed part, n + 1 offsets, its checksum.
@@ -154,12 +154,16 @@ void PutRecord(std::string& out, const Scan& s) {
   PutBytes(out, s.points.data(), s.points.size() * sizeof(Eigen::Vector3f));
   PutBytes(out, s.reflectance.data(), s.reflectance.size() * sizeof(float));
   PutBytes(out, s.valid.data(), s.valid.size());
+  Put(out, static_cast<std::uint8_t>(s.single_viewpoint));
+  Put(out, static_cast<std::uint64_t>(s.list_points.size()));
+  PutBytes(out, s.list_points.data(), s.list_points.size() * sizeof(Eigen::Vector3f));
+  PutBytes(out, s.list_reflectance.data(), s.list_reflectance.size() * sizeof(float));
   Put(out, Checksum(out.data() + begin, out.size() - begin));
 }
 
 std::size_t RecordBytes(const Scan& s) {
   return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 1 + 4 +
-         4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 8;
+         4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 1 + 8 + 16 * s.list_points.size() + 8;
 }
 
 // The record in bytes [begin, end).
@@ -199,6 +203,13 @@ Expected<Scan> ParseRecord(const std::string& bytes, std::size_t begin, std::siz
   r.Bytes(s.points.data(), cells * sizeof(Eigen::Vector3f));
   r.Bytes(s.reflectance.data(), cells * sizeof(float));
   r.Bytes(s.valid.data(), cells);
+  s.single_viewpoint = r.Get<std::uint8_t>() != 0;
+  const std::uint64_t listed = r.Get<std::uint64_t>();
+  if (!r.ok || listed > (end - begin) / 16) return Bad("truncated or corrupt list of points");
+  s.list_points.resize(listed);
+  s.list_reflectance.resize(listed);
+  r.Bytes(s.list_points.data(), listed * sizeof(Eigen::Vector3f));
+  r.Bytes(s.list_reflectance.data(), listed * sizeof(float));
   if (!r.ok) return Bad("truncated");
   if (r.pos != end - 8) return Bad("trailing bytes in a scan's record");
   return s;

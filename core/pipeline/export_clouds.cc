@@ -18,9 +18,9 @@ namespace {
 // A warning names the scan when floats round its world coordinates by more than 0.1 mm.
 void ApplyPose(Scan& scan) {
   double largest = 0;
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i])
-      largest = std::max(largest, (scan.world_from_scan * scan.points[i].cast<double>()).cwiseAbs().maxCoeff());
+  scan.ForEachPoint([&](const Eigen::Vector3f& p, float) {
+    largest = std::max(largest, (scan.world_from_scan * p.cast<double>()).cwiseAbs().maxCoeff());
+  });
   if (merge::FloatRoundingError(largest) > merge::kFloatWarningM) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "world coordinates up to %.0f m are rounded by up to %.2f mm", largest,
@@ -31,6 +31,7 @@ void ApplyPose(Scan& scan) {
   const Eigen::Isometry3f t = scan.world_from_scan.cast<float>();
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) scan.points[i] = t * scan.points[i];
+  for (Eigen::Vector3f& p : scan.list_points) p = t * p;
   scan.world_from_scan = Eigen::Isometry3d::Identity();
   scan.angles = AngularGrid{};
 }
@@ -39,11 +40,10 @@ void ApplyPose(Scan& scan) {
 // scan's number in the project (from 1: LAS reserves 0), named in the file's VLR.
 Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::uint16_t source_id) {
   io::LasCloud cloud;
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!scan.valid[i]) continue;
-    cloud.points.push_back(scan.world_from_scan * scan.points[i].cast<double>());
-    cloud.reflectance.push_back(scan.reflectance[i]);
-  }
+  scan.ForEachPoint([&](const Eigen::Vector3f& p, float refl) {
+    cloud.points.push_back(scan.world_from_scan * p.cast<double>());
+    cloud.reflectance.push_back(refl);
+  });
   cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
   cloud.source_names.assign(source_id + 1, "");
   cloud.source_names[source_id] = scan.name;
@@ -118,7 +118,7 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
                                                                          input.path.string() + "'; choose another output folder"));
       }
     }
-    out.points = scan.CountValid();
+    out.points = scan.CountPoints();
     SubProgress write_progress(progress, (i + 0.5) / n, (i + 1) / n);
     written.Track(out.file);
     const Status s = options.format == "las" ? WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1))

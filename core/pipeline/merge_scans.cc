@@ -18,8 +18,16 @@ namespace scanreg::pipeline {
 namespace {
 
 // Leaves out of `scan` the cells on moving objects and the points beyond the maximum range: marked
-// invalid.
+// invalid. The merge fuses range images along their lines of sight, so a scan's points off its
+// grid (list_points: a cloud seen from several places) are not merged; a warning says how many.
 void LeaveOut(Scan& scan, const std::vector<std::uint32_t>& moving, double max_range_m) {
+  if (!scan.list_points.empty()) {
+    LogWarning("merge: scan '" + scan.name + "': " + std::to_string(scan.list_points.size()) +
+               " points without a cell of its grid (seen from elsewhere than its origin) are not in the merged "
+               "surface, which fuses range images along their lines of sight; export-clouds keeps them");
+    scan.list_points.clear();
+    scan.list_reflectance.clear();
+  }
   for (std::uint32_t c : moving)
     if (c < scan.size()) scan.valid[c] = 0;
   if (max_range_m > 0.0) {

@@ -100,7 +100,7 @@ ScanPreview MakePreview(Scan scan, std::size_t max_cells) {
   ScanPreview p;
   p.full_rows = scan.rows;
   p.full_cols = scan.cols;
-  p.full_valid = scan.CountValid();
+  p.full_valid = scan.CountPoints();
   p.stride = PreviewStride(scan.rows, scan.cols, max_cells);
   if (p.stride == 1) {
     p.scan = std::move(scan);
@@ -122,6 +122,13 @@ ScanPreview MakePreview(Scan scan, std::size_t max_cells) {
     for (int c = 0; c < out.cols; ++c) out.angles.azimuth.push_back(scan.angles.azimuth[c * s]);
     for (int r = 0; r < out.rows; ++r) out.angles.elevation.push_back(scan.angles.elevation[r * s]);
   }
+  // The points off the grid thinned as the grid is: one in stride^2.
+  for (std::size_t k = 0; k < scan.list_points.size(); k += static_cast<std::size_t>(s) * s) {
+    out.list_points.push_back(scan.list_points[k]);
+    out.list_reflectance.push_back(scan.list_reflectance[k]);
+  }
+  out.single_viewpoint = scan.single_viewpoint;
+  out.grid_from_file = scan.grid_from_file;
   out.world_from_scan = scan.world_from_scan;
   out.reference_world_from_scan = scan.reference_world_from_scan;
   return p;

@@ -21,11 +21,11 @@ namespace scanreg::pipeline {
 constexpr std::size_t kPreviewCells = 16'000'000;
 
 struct ScanPreview {
-  Scan scan;               // rows 0, stride, 2 stride… of the scan; columns likewise; named and posed as it
+  Scan scan;               // rows 0, stride, 2 stride… of the scan; columns likewise; one list point in stride^2; named and posed as it
   int stride = 1;          // 1: the full scan
   int full_rows = 0;       // the full scan's grid
   int full_cols = 0;
-  std::size_t full_valid = 0;  // the full scan's valid points
+  std::size_t full_valid = 0;  // the full scan's points (its grid's and its list's)
 };
 
 // The smallest stride whose preview of a rows x cols grid holds at most max_cells cells (at least 1).

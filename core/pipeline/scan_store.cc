@@ -13,7 +13,8 @@ namespace scanreg::pipeline {
 
 std::size_t ScanBytes(const Scan& scan) {
   return scan.points.capacity() * sizeof(Eigen::Vector3f) + scan.reflectance.capacity() * sizeof(float) +
-         scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float);
+         scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float) +
+         scan.list_points.capacity() * sizeof(Eigen::Vector3f) + scan.list_reflectance.capacity() * sizeof(float);
 }
 
 std::size_t DefaultMemoryBudget() {

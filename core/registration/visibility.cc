@@ -17,11 +17,13 @@ namespace {
 // pixel is a projective map of the direction, (col, row, 1) ~ H p, in any orientation of the
 // camera's frame). The perspective map is fitted to the grid's own points (direct linear
 // transform); a grid neither panoramic nor perspective (a triangulation scanner's range grid) has
-// no viewing geometry here, and free space is not tested against it.
+// no viewing geometry here, and free space is not tested against it; nor has a cloud seen from
+// several places (Scan::single_viewpoint false).
 class GridProjector {
  public:
   explicit GridProjector(const Scan& scan) : scan_(scan) {
     if (scan.rows < 3 || scan.cols < 3) return;
+    if (!scan.single_viewpoint) return;  // a cloud seen from several places: its origin saw no free space
     if (!scan.angles.empty()) {
       const auto& az = scan.angles.azimuth;
       const auto& el = scan.angles.elevation;

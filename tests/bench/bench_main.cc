@@ -48,7 +48,8 @@ int main(int argc, char** argv) {
       {"geometric", scanreg::bench::RunGeometricBench}, {"hard", scanreg::bench::RunHardBench},
       {"georef", scanreg::bench::RunGeorefBench}, {"city", scanreg::bench::RunCityBench},
       {"big", scanreg::bench::RunBigScansBench}, {"trust", scanreg::bench::RunTrustBench},
-      {"interiors", scanreg::bench::RunInteriorsBench}, {"combined", scanreg::bench::RunCombinedBench}};
+      {"interiors", scanreg::bench::RunInteriorsBench}, {"combined", scanreg::bench::RunCombinedBench},
+      {"lists", scanreg::bench::RunListsBench}};
   bool quick = false;
   std::vector<std::string> chosen;
   for (int i = 1; i < argc; ++i) {
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
       chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef|city|big|trust|interiors|combined ...]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef|city|big|trust|interiors|combined|lists ...]\n");
       return 2;
     }
   }

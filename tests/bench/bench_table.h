@@ -61,5 +61,6 @@ void RunTrustBench(Table& table, bool quick);  // bench_trust.cc
 void RunInteriorsBench(Table& table, bool quick);  // bench_interiors.cc
 void RunCombinedBench(Table& table, bool quick);   // bench_combined.cc
 void RunBigScansBench(Table& table, bool quick);  // bench_city.cc
+void RunListsBench(Table& table, bool quick);     // bench_lists.cc
 
 }  // namespace scanreg::bench

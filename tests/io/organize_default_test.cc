@@ -124,13 +124,15 @@ class WarningLog {
  public:
   WarningLog() {
     SetLogHandler([this](LogLevel level, const std::string& message) {
-      if (level == LogLevel::kWarning) messages.push_back(message);
+      if (level == LogLevel::kWarning || level == LogLevel::kInfo) messages.push_back(message);
+      warnings += level == LogLevel::kWarning;
     });
   }
   ~WarningLog() { SetLogHandler({}); }
   WarningLog(const WarningLog&) = delete;
   WarningLog& operator=(const WarningLog&) = delete;
-  std::vector<std::string> messages;
+  std::vector<std::string> messages;  // warnings and information
+  int warnings = 0;
 };
 
 // Checks what holds for any organized cloud: every kept point is an input point, kept at most as
@@ -187,9 +189,13 @@ TEST(OrganizeDefault, VelodyneLikeCloudKeepsNearlyAllItsPoints) {
   const std::size_t kept = CheckGrid(*scan, points, 1);
   std::printf("HDL-32-like: %zu of %zu points kept in a %d x %d grid\n", kept, points.size(), scan->rows, scan->cols);
   EXPECT_GE(kept, std::size_t(std::ceil(0.99 * points.size())));
-  // Any point left out is reported, with the count and the file.
+  // The points without a cell stay as a list; they are reported, with the count and the file, and a
+  // lidar seen from one place keeps its viewpoint.
+  EXPECT_EQ(scan->list_points.size(), points.size() - kept);
+  EXPECT_TRUE(scan->single_viewpoint);
   if (kept < points.size()) {
     ASSERT_EQ(log.messages.size(), 1u);
+    EXPECT_EQ(log.warnings, 0);
     EXPECT_NE(log.messages[0].find("hdl32.pcd"), std::string::npos);
     EXPECT_NE(log.messages[0].find(Count(points.size() - kept) + " of "), std::string::npos);
   }
@@ -242,7 +248,7 @@ TEST(OrganizeDefault, RgbdLikeFrameKeepsNearlyAllItsPoints) {
   }
 }
 
-TEST(OrganizeDefault, PointsLeftOutAreReportedWithTheirCount) {
+TEST(OrganizeDefault, PointsWithoutACellAreKeptAsAListAndReportedWithTheirCount) {
   std::mt19937 rng(15);
   std::vector<Eigen::Vector3f> points = SimulateTls(rng, 0.5, 0, 90, -10, 20);
   const std::size_t n = points.size();
@@ -260,12 +266,44 @@ TEST(OrganizeDefault, PointsLeftOutAreReportedWithTheirCount) {
   Expected<Scan> scan = OrganizeCloudByDensity(points, {}, "echoes", "echoes.ply");
   ASSERT_TRUE(scan.ok()) << scan.error().ToString();
   EXPECT_EQ(scan->CountValid(), n);
+  // Every point is kept: the echoes and the repeats as a list, in the order of the file.
+  EXPECT_EQ(scan->CountPoints(), 2 * n + 5);
+  ASSERT_EQ(scan->list_points.size(), n + 5);
+  EXPECT_EQ(scan->list_reflectance.size(), n + 5);
+  std::multiset<Key> in, out;
+  for (const Eigen::Vector3f& p : points) in.insert(KeyOf(p));
+  scan->ForEachPoint([&](const Eigen::Vector3f& p, float) { out.insert(KeyOf(p)); });
+  EXPECT_TRUE(in == out);
+  EXPECT_TRUE(scan->single_viewpoint);  // echoes and repeats are no second viewpoint
   ASSERT_EQ(log.messages.size(), 1u);
   const std::string& m = log.messages[0];
   EXPECT_NE(m.find("'echoes.ply'"), std::string::npos) << m;
   EXPECT_NE(m.find(Count(n + 5) + " of " + Count(2 * n + 5)), std::string::npos) << m;
-  EXPECT_NE(m.find("5 share a grid cell with a nearer point"), std::string::npos) << m;
+  EXPECT_NE(m.find("5 share a cell with a nearer point"), std::string::npos) << m;
   EXPECT_NE(m.find(Count(n) + " repeat another point exactly"), std::string::npos) << m;
+  EXPECT_NE(m.find("kept as a list"), std::string::npos) << m;
+}
+
+// A cloud merged from two stations (the second 2 m / 1 m away) organized around the first: the
+// points that crowd each other's cells are kept as a list, and the cloud is marked as seen from
+// more than one place, with a warning, so no free space is judged from its origin.
+TEST(OrganizeDefault, AMergedCloudKeepsEveryPointAndLosesItsViewpoint) {
+  std::mt19937 rng(16);
+  std::vector<Eigen::Vector3f> points = SimulateTls(rng, 0.5, 0, 360, -30, 40);
+  const std::size_t first = points.size();
+  for (const Eigen::Vector3f& p : SimulateTls(rng, 0.5, 0, 360, -30, 40)) points.push_back(p + Eigen::Vector3f(2, 1, 0));
+  std::shuffle(points.begin(), points.end(), rng);
+  WarningLog log;
+  Expected<Scan> scan = OrganizeCloudByDensity(points, {}, "merged", "merged.ply");
+  ASSERT_TRUE(scan.ok()) << scan.error().ToString();
+  std::printf("merged: %zu of %zu points in the grid (%zu from the first station), %zu as a list\n", scan->CountValid(),
+              points.size(), first, scan->list_points.size());
+  EXPECT_EQ(scan->CountPoints(), points.size());
+  EXPECT_GT(scan->list_points.size(), points.size() / 100);
+  EXPECT_FALSE(scan->single_viewpoint);
+  ASSERT_EQ(log.warnings, 1);
+  EXPECT_NE(log.messages[0].find("not seen from one place"), std::string::npos) << log.messages[0];
+  EXPECT_TRUE(scan->Validate().ok());
 }
 
 TEST(OrganizeDefault, RefusesCloudsNoGridCanHold) {
@@ -304,6 +342,7 @@ TEST(OrganizeDefault, RealUnorganizedCloudsKeepNearlyAllTheirPoints) {
     std::printf("%s: %zu of %zu distinct points (%zu in the file) kept in a %d x %d grid\n", file, kept,
                 distinct.size(), points.size(), scan->rows, scan->cols);
     EXPECT_GE(kept, std::size_t(std::ceil(0.99 * distinct.size())));
+    EXPECT_EQ(scan->CountPoints(), points.size());  // the repeats too: every point of the file
     if (distinct.size() < points.size()) {
       ASSERT_EQ(log.messages.size(), 1u);
       EXPECT_NE(log.messages[0].find(Count(points.size() - distinct.size()) + " repeat"), std::string::npos)

@@ -35,6 +35,10 @@ void ExpectSameScans(const std::vector<Scan>& a, const std::vector<Scan>& b) {
     EXPECT_EQ(a[k].world_from_scan.matrix(), b[k].world_from_scan.matrix()) << "bit for bit at UTM coordinates";
     EXPECT_EQ(a[k].angles.azimuth, b[k].angles.azimuth);
     EXPECT_EQ(a[k].angles.elevation, b[k].angles.elevation);
+    EXPECT_EQ(a[k].list_points, b[k].list_points);
+    EXPECT_EQ(a[k].list_reflectance, b[k].list_reflectance);
+    EXPECT_EQ(a[k].single_viewpoint, b[k].single_viewpoint);
+    EXPECT_EQ(a[k].grid_from_file, b[k].grid_from_file);
   }
 }
 
@@ -67,6 +71,26 @@ TEST_F(CacheFixture, ASecondReadComesFromTheCacheUnchanged) {
   auto direct = ReadScanFile(ptx, progress, cancel);
   ASSERT_TRUE(direct.ok());
   ExpectSameScans(*direct, cached);
+}
+
+// A scan's points off its grid and its viewpoint flag come back from the cache as they went in;
+// an entry cut inside the list is refused, not read short.
+TEST(ScanCache, KeepsTheListedPointsAndTheViewpoint) {
+  Scan with_list = Grid("merged", 0);
+  for (int k = 0; k < 500; ++k) {
+    with_list.list_points.emplace_back(6.0f + 0.01f * k, -0.02f * k, 1.5f);
+    with_list.list_reflectance.push_back(0.001f * k);
+  }
+  with_list.single_viewpoint = false;
+  with_list.grid_from_file = false;
+  const std::string bytes = SerializeScanCache({with_list, Grid("plain", 1)}, 77);
+  Expected<std::vector<Scan>> back = ParseScanCache(bytes, 77);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ExpectSameScans({with_list, Grid("plain", 1)}, *back);
+  EXPECT_EQ(back->front().CountPoints(), with_list.CountValid() + 500);
+  std::string cut = SerializeScanCache({with_list}, 77);
+  cut.resize(cut.size() - 3000);
+  EXPECT_FALSE(ParseScanCache(cut, 77).ok());
 }
 
 TEST_F(CacheFixture, ACorruptEntryIsRebuilt) {
