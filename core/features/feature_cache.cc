@@ -86,6 +86,10 @@ std::uint64_t ScanContentHash(const Scan& scan) {
   h.Add(scan.points.data(), scan.points.size() * sizeof(Eigen::Vector3f));
   h.Add(scan.reflectance.data(), scan.reflectance.size() * sizeof(float));
   h.Add(scan.valid.data(), scan.valid.size());
+  if (!scan.list_points.empty()) {  // a scan without listed points keeps the key it had
+    h.Add(scan.list_points.data(), scan.list_points.size() * sizeof(Eigen::Vector3f));
+    h.Add(scan.list_reflectance.data(), scan.list_reflectance.size() * sizeof(float));
+  }
   return h.Digest();
 }
 

@@ -24,7 +24,12 @@ constexpr int kNeighbours = 16;
 
 DataScale MeasureDataScale(const Scan& scan) {
   DataScale s;
-  const std::vector<Eigen::Vector3d> all = ValidPoints(scan);
+  // The grid's points: spacing and noise are those of one scanner's sampling (a merged cloud's list
+  // interleaves other stations' samples, a file's exact repeats would read as zero spacing).
+  std::vector<Eigen::Vector3d> all;
+  all.reserve(scan.CountValid());
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i]) all.push_back(scan.points[i].cast<double>());
   const std::vector<Eigen::Vector3d> pts = ThinEvenly(all, kMaxPoints);
   if (pts.size() < 20) return s;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();

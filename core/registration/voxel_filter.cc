@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace scanreg {
 namespace {
@@ -21,13 +23,42 @@ struct VoxelKeyHash {
   }
 };
 
+// A point's exact bits, for finding repeats.
+struct PointBits {
+  std::uint32_t x, y, z;
+  bool operator==(const PointBits& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PointBitsHash {
+  std::size_t operator()(const PointBits& b) const {
+    return static_cast<std::size_t>((std::uint64_t(b.x) * 0x9E3779B97F4A7C15ULL) ^ (std::uint64_t(b.y) * 0xC2B2AE3D27D4EB4FULL) ^
+                                    (std::uint64_t(b.z) * 0x165667B19E3779F9ULL));
+  }
+};
+PointBits BitsOf(const Eigen::Vector3f& p) {
+  PointBits b;
+  std::memcpy(&b.x, &p.x(), 4), std::memcpy(&b.y, &p.y(), 4), std::memcpy(&b.z, &p.z(), 4);
+  return b;
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan) {
   std::vector<Eigen::Vector3d> pts;
-  pts.reserve(scan.CountValid());
+  pts.reserve(scan.CountPoints());
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) pts.push_back(scan.points[i].cast<double>());
+  // Seen from one place, the grid samples every surface and the list holds only a cell's losers
+  // (repeats, neighbours within the angular step). A cloud seen from several places lists surfaces
+  // the grid misses: its listed points that repeat no point before them are added (a file that
+  // holds every point twice would otherwise weigh every neighbourhood double).
+  if (scan.list_points.empty() || scan.single_viewpoint) return pts;
+  std::unordered_set<PointBits, PointBitsHash> listed, seen;
+  listed.reserve(scan.list_points.size());
+  for (const Eigen::Vector3f& p : scan.list_points) listed.insert(BitsOf(p));
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i] && listed.count(BitsOf(scan.points[i]))) seen.insert(BitsOf(scan.points[i]));
+  for (const Eigen::Vector3f& p : scan.list_points)
+    if (seen.insert(BitsOf(p)).second) pts.push_back(p.cast<double>());
   return pts;
 }
 

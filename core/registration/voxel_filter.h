@@ -8,7 +8,10 @@
 
 namespace scanreg {
 
-// The scan's valid points in double precision, scanner frame, in cell order.
+// The scan's points in double precision, scanner frame: the grid's valid cells in cell order, and
+// for a cloud seen from several places (Scan::single_viewpoint false) then its listed points that
+// repeat no point before them — what the steps that need no range image (dense ICP, the geometric
+// features) work on.
 std::vector<Eigen::Vector3d> ValidPoints(const Scan& scan);
 
 // At most max_count of the points, taken at an even stride (all of them when max_count <= 0).
