@@ -220,12 +220,7 @@ Expected<Scan> ReadLas(const std::filesystem::path& path, ProgressSink& progress
     for (std::size_t k = 0; k < reflectance.size(); ++k) reflectance[k] = las->intensity[k] / full_scale;
   las->xyz = {};
   Expected<Scan> scan = OrganizeCloudByDensity(points, reflectance, path.stem().string(), path.string());
-  if (!scan) {
-    return MakeError(scan.error().code,
-                     scan.error().message + " (a LAS cloud from a mobile, handheld or airborne system, or merged from "
-                     "several stations, has no single viewpoint, and scanreg keeps a scan only as a range grid seen "
-                     "from one: import the stations' own scans, e.g. PTX or E57, instead)");
-  }
+  if (!scan) return scan.error();
   scan->world_from_scan = Eigen::Isometry3d(Eigen::Translation3d(centre));
   return scan;
 }

@@ -54,9 +54,8 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
 // holds that centre in double, so world coordinates are kept exactly), intensity as reflectance
 // (divided by 255 when no value exceeds 255 — 8-bit sensors written into the 16-bit field — else by
 // 65535; 0.5 when every intensity is 0), organized around that centre as any unstructured cloud is
-// (organize_default.h: points that share a grid cell with a nearer one stay in the scan's list).
-// A cloud no grid around that centre fits for half of its points (airborne) is refused with an
-// error that says so.
+// (organize_default.h: points that share a grid cell with a nearer one stay in the scan's list,
+// and a cloud seen from several places — mobile, airborne, merged — is marked so).
 Expected<Scan> ReadLas(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel);
 
 }  // namespace scanreg::io

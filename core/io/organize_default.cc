@@ -24,8 +24,6 @@ constexpr double kTargetKept = 0.995;
 // refinements, the coarsest within kRingsNearlyAsGood of the best.
 constexpr double kRingsKept = 0.99;
 constexpr double kRingsNearlyAsGood = 0.005;
-// Below this fraction kept by the best grid within the budget, organizing is refused.
-constexpr double kMinKept = 0.5;
 // How far a point may move along its row when its cell is taken: to the adjacent column for
 // rings (the columns follow the data's own azimuth step), two columns in a uniform grid finer
 // than the point spacing (two cells there are about one point spacing).
@@ -380,13 +378,9 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
       if (best_kept >= target) break;
     }
   }
-  if (!best || double(best_kept) < kMinKept * double(distinct)) {
-    return MakeError(ErrorCode::kParseError,
-                     source + ": cannot organize the unorganized cloud into a scan grid: no grid of at most " +
-                         std::to_string(int(kMaxCellsPerPoint)) + " cells per point keeps half of its " +
-                         Thousands(distinct) + " distinct points (best: " + Thousands(best_kept) +
-                         "), the directions from the origin are too uneven. Is the scanner at the origin of "
-                         "the file's frame, and does the file hold a single scan?");
+  if (!best) {
+    return MakeError(ErrorCode::kParseError, source + ": cannot organize the cloud into a scan grid within " +
+                                                 std::to_string(int(kMaxCellsPerPoint)) + " cells per point");
   }
   Expected<Scan> scan = projection.Organize(reflectance, *best, std::move(name));
   if (!scan) return Failed(source, scan.error());

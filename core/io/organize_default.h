@@ -26,8 +26,8 @@ namespace scanreg::io {
 // under half a turn. Points without a cell stay in the scan's list_points (reported with their
 // count); when more than 1 % of the distinct points have none, the cloud was not seen from one
 // place: single_viewpoint is false and a warning says so. `source` names
-// the file (or file and scan) in messages. Error when the cloud has no usable point, or when no
-// grid within the cell budget keeps half of its points (not a scan seen from the origin).
+// the file (or file and scan) in messages. Error when the cloud has no usable point. However few
+// points the grid keeps (a cloud merged from many stations), no point is lost.
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                                       std::string name, const std::string& source);
 

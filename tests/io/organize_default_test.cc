@@ -306,14 +306,22 @@ TEST(OrganizeDefault, AMergedCloudKeepsEveryPointAndLosesItsViewpoint) {
   EXPECT_TRUE(scan->Validate().ok());
 }
 
-TEST(OrganizeDefault, RefusesCloudsNoGridCanHold) {
-  // All points on one ray: one cell would keep one of them.
+// All points on one ray: one cell holds one of them, the others stay as a list — no point is lost,
+// and such a cloud is no view from the origin. A cloud without a usable point is refused.
+TEST(OrganizeDefault, ACloudNoGridCanHoldKeepsEveryPointAsAList) {
   std::vector<Eigen::Vector3f> points;
   for (int k = 1; k <= 200; ++k) points.emplace_back(0.1f * k, 0.05f * k, 0.02f * k);
+  WarningLog log;
   Expected<Scan> scan = OrganizeCloudByDensity(points, {}, "ray", "ray.pcd");
-  ASSERT_FALSE(scan.ok());
-  EXPECT_NE(scan.error().message.find("ray.pcd"), std::string::npos) << scan.error().message;
-  EXPECT_EQ(OrganizeCloudByDensity({Eigen::Vector3f::Zero()}, {}, "z", "z.ply").ok(), false);
+  ASSERT_TRUE(scan.ok()) << scan.error().ToString();
+  EXPECT_EQ(scan->CountPoints(), points.size());
+  EXPECT_LT(scan->CountValid(), 10u);
+  EXPECT_FALSE(scan->single_viewpoint);
+  ASSERT_EQ(log.warnings, 1);
+  EXPECT_NE(log.messages[0].find("ray.pcd"), std::string::npos) << log.messages[0];
+  Expected<Scan> empty = OrganizeCloudByDensity({Eigen::Vector3f::Zero()}, {}, "z", "z.ply");
+  ASSERT_FALSE(empty.ok());
+  EXPECT_NE(empty.error().message.find("z.ply"), std::string::npos) << empty.error().message;
 }
 
 // Real clouds: the PCL test cloud (a tilting laser, sensor unstated) and PCL's two 360 deg room

@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <array>
 #include <map>
+#include <set>
 
 #include "core/io/pose_file.h"
 #include "tests/io/io_test_util.h"
@@ -205,6 +207,45 @@ TEST(Ply, BigEndianRangeGridIsFlippedToTopRowFirst) {
   EXPECT_EQ(scan->Point(1, 1), Eigen::Vector3f(1, -1, 2));
   EXPECT_FLOAT_EQ(scan->Reflectance(1, 0), 1.0f);
   EXPECT_FLOAT_EQ(scan->Reflectance(0, 0), 0.2f);
+}
+
+// Vertices a range_grid cell does not name first — a second return of a cell, a vertex no cell
+// names — are kept as the scan's list, with their intensity; writing such a scan gives every point
+// back (as a plain list, organized again on reading).
+TEST(Ply, VerticesNoCellTakesAreKeptAsAList) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nobj_info num_cols 2\nobj_info num_rows 2\nelement vertex 5\n"
+      "property float x\nproperty float y\nproperty float z\nproperty float intensity\n"
+      "element range_grid 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 -1 2 0.1\n1 -1 2 0.2\n0 1 2 0.3\n0 -1.5 3 0.4\n5 5 5 0.5\n"
+      "2 0 3\n1 1\n1 2\n0\n";
+  TempDir dir;
+  WriteBytes(dir / "returns.ply", ply);
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<Scan> scan = ReadPly(dir / "returns.ply", progress, cancel);
+  ASSERT_TRUE(scan.ok()) << scan.error().ToString();
+  EXPECT_EQ(scan->CountValid(), 3u);
+  ASSERT_EQ(scan->list_points.size(), 2u);
+  EXPECT_EQ(scan->list_points[0], Eigen::Vector3f(0, -1.5f, 3));
+  EXPECT_EQ(scan->list_points[1], Eigen::Vector3f(5, 5, 5));
+  EXPECT_FLOAT_EQ(scan->list_reflectance[0], 0.4f);
+  EXPECT_FLOAT_EQ(scan->list_reflectance[1], 0.5f);
+  EXPECT_EQ(scan->CountPoints(), 5u);
+
+  Scan room = MakeRoomScan(36, 80, "room");
+  for (int k = 0; k < 40; ++k) {
+    room.list_points.emplace_back(1.0f + 0.05f * k, 0.5f, -0.2f);
+    room.list_reflectance.push_back(0.25f);
+  }
+  ASSERT_TRUE(WritePly(dir / "listed.ply", room, progress, cancel).ok());
+  Expected<Scan> back = ReadPly(dir / "listed.ply", progress, cancel);
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  EXPECT_EQ(back->CountPoints(), room.CountPoints());
+  std::multiset<std::array<float, 3>> written, read;
+  room.ForEachPoint([&](const Eigen::Vector3f& p, float) { written.insert({p.x(), p.y(), p.z()}); });
+  back->ForEachPoint([&](const Eigen::Vector3f& p, float) { read.insert({p.x(), p.y(), p.z()}); });
+  EXPECT_TRUE(written == read);  // identity pose: the doubles hold the floats exactly
 }
 
 TEST(Ply, BadFilesNameTheProblem) {
