@@ -399,9 +399,10 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
     if (conflicts > 0) message += Thousands(conflicts) + " share a cell with a nearer point";
     if (conflicts > 0 && repeated > 0) message += ", ";
     if (repeated > 0) message += Thousands(repeated) + " repeat another point exactly";
-    message += "); they are kept as a list and exported with the others, the registration uses the grid";
+    message += "); they are kept as a list and exported with the others";
     if (!scan->single_viewpoint)
-      message += "; the cloud was not seen from one place, so no link is judged on free space seen from its origin";
+      message += "; the cloud was not seen from one place: the registration's geometry uses the list too, and no "
+                 "link is judged on free space seen from its origin";
     if (scan->single_viewpoint) Log(LogLevel::kInfo, message);
     else LogWarning(message);
   }
