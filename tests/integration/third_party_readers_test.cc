@@ -19,6 +19,8 @@
 #include <random>
 #include <unordered_map>
 
+#include "core/io/pose_file.h"
+#include "core/io/ply.h"
 #include "core/io/text_parse.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/export_clouds.h"
@@ -99,18 +101,19 @@ std::vector<Eigen::Vector3d> ReadPlyWithPcl(const std::filesystem::path& path) {
   return out;
 }
 
-// Largest distance from each read point to the nearest expected point (a voxel hash of `expected`;
-// the neighbouring cells by their integer coordinates: cell * floor(p / cell) moved by one cell in
-// floating point can skip a cell).
-double WorstDistance(const std::vector<Eigen::Vector3d>& read, const std::vector<Eigen::Vector3d>& expected,
-                     double cell) {
+// Distance from each read point to the nearest expected point within `cell` (a voxel hash of
+// `expected`; the neighbouring cells by their integer coordinates: cell * floor(p / cell) moved by one
+// cell in floating point can skip a cell); 1e300 where none is that near.
+std::vector<double> NearestDistances(const std::vector<Eigen::Vector3d>& read, const std::vector<Eigen::Vector3d>& expected,
+                                     double cell) {
   auto cell_of = [cell](const Eigen::Vector3d& p) -> Eigen::Array3d { return (p / cell).array().floor(); };
   auto key = [](const Eigen::Array3d& q) {
     return (std::int64_t(q.x()) * 73856093) ^ (std::int64_t(q.y()) * 19349663) ^ (std::int64_t(q.z()) * 83492791);
   };
   std::unordered_multimap<std::int64_t, Eigen::Vector3d> grid;
   for (const auto& p : expected) grid.emplace(key(cell_of(p)), p);
-  double worst = 0;
+  std::vector<double> nearest;
+  nearest.reserve(read.size());
   for (const auto& p : read) {
     double best = 1e300;
     const Eigen::Array3d c = cell_of(p);
@@ -120,9 +123,16 @@ double WorstDistance(const std::vector<Eigen::Vector3d>& read, const std::vector
           auto range = grid.equal_range(key(c + Eigen::Array3d(dx, dy, dz)));
           for (auto it = range.first; it != range.second; ++it) best = std::min(best, (it->second - p).norm());
         }
-    worst = std::max(worst, best);
+    nearest.push_back(best);
   }
-  return worst;
+  return nearest;
+}
+
+// Largest distance from each read point to the nearest expected point.
+double WorstDistance(const std::vector<Eigen::Vector3d>& read, const std::vector<Eigen::Vector3d>& expected,
+                     double cell) {
+  const std::vector<double> nearest = NearestDistances(read, expected, cell);
+  return nearest.empty() ? 0.0 : *std::max_element(nearest.begin(), nearest.end());
 }
 
 // Median distance from mesh vertices to the registered scan points (world coordinates).
@@ -325,6 +335,64 @@ TEST(ThirdPartyReaders, AMergedCloudIsImportedAndExportedWithEveryPoint) {
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.error().message.find("e57, ply or las"), std::string::npos) << refused.error().message;
   EXPECT_NE(refused.error().message.find("merged"), std::string::npos) << refused.error().message;
+}
+
+// The libE57 reference file bunnyDouble.e57 (written by another program: one unstructured list of
+// 30,571 points, no grid): every point kept on import and on export, where PCL's reader finds them
+// again; the points are where the file's own cartesianBounds and the Stanford range scans at their
+// bun.conf poses (the same bunny, another scanner's data) say they are.
+TEST(ThirdPartyReaders, AnUnstructuredE57FromAnotherProgramKeepsEveryPoint) {
+  SCANREG_REQUIRE_REALDATA(data);
+  test::TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const std::filesystem::path file = data / "e57_libe57format" / "bunnyDouble.e57";
+  pipeline::CreateProjectOptions create;
+  create.scan_files = {file};
+  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
+  ASSERT_TRUE(created.ok()) << created.error().ToString();
+  io::Project project = created->project;
+  auto scans = pipeline::LoadProjectScans(project, progress, cancel);
+  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
+  ASSERT_EQ(scans->size(), 1u);
+  const Scan& scan = scans->front();
+  EXPECT_EQ(scan.CountPoints(), 30571u);  // the file's recordCount
+  std::vector<Eigen::Vector3d> imported;
+  scan.ForEachPoint([&](const Eigen::Vector3f& p, float) { imported.push_back(scan.world_from_scan * p.cast<double>()); });
+  ASSERT_EQ(imported.size(), 30571u);
+  // The file's cartesianBounds, as its writer put them in its XML section.
+  Eigen::Vector3d lo = imported[0], hi = imported[0];
+  for (const Eigen::Vector3d& p : imported) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  EXPECT_LT((lo - Eigen::Vector3d(-9.4689e-2, 4.0011e-2, -6.1873e-2)).cwiseAbs().maxCoeff(), 1e-6) << lo.transpose();
+  EXPECT_LT((hi - Eigen::Vector3d(6.1009e-2, 1.87321e-1, 5.8799e-2)).cwiseAbs().maxCoeff(), 1e-6) << hi.transpose();
+  // On the bunny's surface as the ten Stanford range scans saw it.
+  Expected<std::vector<io::NamedPose>> poses = io::ReadBunConf(data / "stanford_bunny" / "bun.conf");
+  ASSERT_TRUE(poses.ok()) << poses.error().ToString();
+  std::vector<Eigen::Vector3d> surface;
+  for (const io::NamedPose& pose : *poses) {
+    Expected<Scan> s = io::ReadPly(data / "stanford_bunny" / pose.scan, progress, cancel);
+    ASSERT_TRUE(s.ok()) << s.error().ToString();
+    s->ForEachPoint([&](const Eigen::Vector3f& p, float) { surface.push_back(pose.world_from_scan * p.cast<double>()); });
+  }
+  std::vector<double> to_surface = NearestDistances(imported, surface, 0.005);
+  std::nth_element(to_surface.begin(), to_surface.begin() + to_surface.size() / 2, to_surface.end());
+  const double median = to_surface[to_surface.size() / 2];
+  std::printf("bunnyDouble.e57: %zu points kept; median distance to the range scans %.3f mm\n", imported.size(),
+              median * 1e3);
+  EXPECT_LT(median, 1e-3);
+
+  project.scans[0].registered = true;
+  pipeline::ExportCloudsOptions options;
+  options.dir = dir / "ply";
+  options.format = "ply";
+  auto exported = pipeline::ExportClouds(project, options, progress, cancel);
+  ASSERT_TRUE(exported.ok()) << exported.error().ToString();
+  ASSERT_EQ(exported->size(), 1u);
+  EXPECT_EQ((*exported)[0].points, 30571u);
+  const std::vector<Eigen::Vector3d> read = ReadPlyWithPcl((*exported)[0].file);
+  ASSERT_EQ(read.size(), imported.size());
+  EXPECT_LT(WorstDistance(read, imported, 0.005), 1e-4);  // 0.1 mm
+  EXPECT_LT(WorstDistance(imported, read, 0.005), 1e-4);
 }
 
 }  // namespace
