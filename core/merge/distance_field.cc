@@ -56,7 +56,7 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     const Eigen::Vector3f& a = patches.points[p.v[0]];
     const Eigen::Vector3f& b = patches.points[p.v[1]];
     const Eigen::Vector3f& c = patches.points[p.v[2]];
-    const Eigen::Vector3f closest = ClosestPointOnTriangle(x, a, b, c);
+    const Eigen::Vector3f closest = patches.Closest(id, x);
     const float d = (closest - x).norm();
     if (d < d_min) d_min = d, nearest_normal = p.normal;
     const Eigen::Vector3f centre = (a + b + c) / 3.0f;
@@ -66,8 +66,7 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     const float t2 = std::max(0.0f, to_x.squaredNorm() - s * s);  // along the surface, from its centre
     if (t2 > 4.0f * h * h) continue;
     // Range noise along the line of sight, seen along the normal: sigma cos(phi) (S's sigma').
-    const Eigen::Vector3f los = (centre - patches.scanner[p.scan]).normalized();
-    const float cos_phi = std::max(std::abs(los.dot(p.normal)), 0.2f);
+    const float cos_phi = patches.SightCosine(p, centre, p.normal);
     votes.push_back({to_x, p.normal, std::exp(-double(t2) / (h * h)) / (sigma2 * cos_phi * cos_phi)});
   }
   // No measurement near, or none beside x along the surface: no surface invented here (a hole stays a hole).
@@ -107,8 +106,7 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
   closest.resize(candidates.size());
   float d_min = std::numeric_limits<float>::max();
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const Patch& p = patches.patches[candidates[i]];
-    closest[i] = ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]);
+    closest[i] = patches.Closest(candidates[i], x);
     d_min = std::min(d_min, (closest[i] - x).norm());
   }
   if (d_min > band) return false;
@@ -120,9 +118,8 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
     if (d > limit) continue;
     const Patch& p = patches.patches[candidates[i]];
     // Step 2: phi between the patch's line of sight and the direction to x (the normal when x is on it).
-    const Eigen::Vector3f los = (closest[i] - patches.scanner[p.scan]).normalized();
     const Eigen::Vector3f dir = d > 1e-7f ? Eigen::Vector3f(to_x / d) : p.normal;
-    const float cos_phi = std::max(std::abs(los.dot(dir)), 0.2f);  // guard phi near 90 degrees
+    const float cos_phi = patches.SightCosine(p, closest[i], dir);
     const float side = -to_x.dot(p.normal);                        // (p' - x) . n
     const float vote = side < 0 ? 1.0f : (side > 0 ? -1.0f : 0.0f);
     if (d == d_min) nearest_vote = vote == 0.0f ? 1.0f : vote;
@@ -208,15 +205,27 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
   for (int id : candidates) {
     const Patch& p = patches.patches[id];
     if (!patches.views[p.scan].empty() || !patches.Reaches(id, x, band)) continue;
-    const float d =
-        (ClosestPointOnTriangle(x, patches.points[p.v[0]], patches.points[p.v[1]], patches.points[p.v[2]]) - x).norm();
+    const float d = (patches.Closest(id, x) - x).norm();
     if (d <= band && d < nearest[p.scan].first) nearest[p.scan] = {d, id};
   }
   bool unviewed = false;
   for (std::size_t s = 0; !candidates.empty() && s < nearest.size(); ++s) {
     if (nearest[s].second < 0) continue;
-    unviewed = true;
     const Patch& p = patches.patches[nearest[s].second];
+    unviewed |= bool(patches.viewpoint[s]);  // the fallback below: scans with a scanner only
+    if (!patches.viewpoint[s]) {
+      // No scanner to look along (a cloud seen from several places): the consensus of its discs
+      // beside x along their normals; one disc's normal alone may face the wrong way.
+      thread_local std::vector<int> own;
+      own.clear();
+      for (int id : candidates)
+        if (patches.patches[id].scan == int(s)) own.push_back(id);
+      float sdf = 0.0f, w = 0.0f;
+      if (!ConsensusDistance(patches, x, options, own, &sdf, &w) || std::abs(sdf) > band) continue;
+      sum += sdf;
+      weight += 1.0;
+      continue;
+    }
     const Eigen::Vector3f& eye = patches.scanner[s];
     const Eigen::Vector3f ray = x - eye;
     const float range = ray.norm();
@@ -238,7 +247,7 @@ float TsdfDistance(const RangePatches& patches, const Eigen::Vector3f& x, const 
     // nearest patch, with a token weight, so that the surface has no hole there.
     float best = std::numeric_limits<float>::max();
     for (const auto& [d, id] : nearest) {
-      if (id < 0 || d >= best) continue;
+      if (id < 0 || d >= best || !patches.viewpoint[patches.patches[id].scan]) continue;
       const Patch& p = patches.patches[id];
       best = d;
       *distance = (x - patches.points[p.v[0]]).dot(p.normal);

@@ -59,15 +59,18 @@ Expected<FirstPass> ReadLayouts(const ScanSource& scans, const MergeOptions& opt
     const Scan& s = **scan;
     if (Status v = s.Validate(); !v) return v.error();
     names += (names.empty() ? "" : ", ") + s.name;
-    if (!have_origin && s.CountValid() > 0) {
+    if (!have_origin && s.CountPoints() > 0) {
       out.origin = s.world_from_scan.translation().array().round();
       have_origin = true;
     }
-    out.layouts[i] = LayoutScan(s, out.origin, true);
-    valid += out.layouts[i].valid;
+    out.layouts[i] = LayoutScan(s, out.origin, true, options.voxel_m, cancel);
+    if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
+    const ScanLayout::Discs* discs = out.layouts[i].discs.get();
+    valid += out.layouts[i].valid + (discs ? discs->points.size() : 0);
     out.max_patch_edge = std::max(out.max_patch_edge, MaxPatchEdge(out.layouts[i].spacing, options.voxel_m));
     for (const Eigen::AlignedBox3f& b : out.layouts[i].blocks)
       if (!b.isEmpty()) box.extend(b.cast<double>());
+    if (discs && !discs->box.isEmpty()) box.extend(discs->box.cast<double>());
   }
   if (valid == 0) {
     return MakeError(ErrorCode::kInvalidArgument, scans.count == 0
@@ -105,8 +108,10 @@ Status MergeTile(const ScanSource& scans, const FirstPass& first, const MergeOpt
   std::vector<ScanPiece> pieces;
   for (int i = 0; i < scans.count; ++i) {
     const ScanLayout& layout = first.layouts[i];
-    int r0, r1, c0, c1;
-    if (layout.valid == 0 || !PieceWindow(layout, keep, &r0, &r1, &c0, &c1)) continue;
+    int r0 = 0, r1 = 0, c0 = 0, c1 = 0;  // no cell: its discs only
+    const bool cells = layout.valid > 0 && PieceWindow(layout, keep, &r0, &r1, &c0, &c1);
+    const bool discs = layout.discs && !layout.discs->box.isEmpty() && layout.discs->box.intersects(keep);
+    if (!cells && !discs) continue;
     auto scan = scans.get(i);
     if (!scan) return scan.error();
     ScanPiece piece;

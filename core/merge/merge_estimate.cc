@@ -53,6 +53,10 @@ Count CountBlocks(const std::vector<const Scan*>& scans, const std::vector<int>&
       c.points += weight;
       if (!c.capped && !counter.Add((to_grid * s->points[i].cast<double>()).cast<float>())) c.capped = true;
     }
+    for (const Eigen::Vector3f& p : s->list_points) {  // no maximum range: LeaveOut keeps them all
+      c.points += weight;
+      if (!c.capped && !counter.Add((to_grid * p.cast<double>()).cast<float>())) c.capped = true;
+    }
   }
   c.blocks = counter.count();
   // Tiles of options.tile_blocks blocks at the merge's voxel, with their margins (merge.cc: two

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/merge/point_normals.h"
+
 namespace scanreg::merge {
 
 namespace {
@@ -30,7 +32,7 @@ Eigen::Isometry3f Shifted(const Scan& s, const Eigen::Vector3d& origin) {
 // The scan's range image for Curless–Levoy projection (empty without an angular grid).
 RangeView MakeView(const Scan& s, const Eigen::Isometry3f& t) {
   RangeView view;
-  if (s.angles.empty() || int(s.angles.azimuth.size()) != s.cols || int(s.angles.elevation.size()) != s.rows) return view;
+  if (!s.single_viewpoint || s.angles.empty() || int(s.angles.azimuth.size()) != s.cols || int(s.angles.elevation.size()) != s.rows) return view;
   view.scan_from_world = t.linear().transpose();
   view.eye = t.translation();
   view.angles = s.angles;
@@ -91,6 +93,33 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
   return true;
 }
 
+// The discs of a scan at t (ScanLayout::Discs), or null.
+std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::Isometry3f& t, double voxel_m,
+                                                   const CancelToken& cancel) {
+  const bool every_point = !s.single_viewpoint;
+  if (s.list_points.empty() && !every_point) return nullptr;
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(s.list_points.size() + (every_point ? s.CountValid() : 0));
+  if (every_point)
+    for (std::size_t i = 0; i < s.size(); ++i)
+      if (s.valid[i]) points.push_back(t * s.points[i]);
+  for (const Eigen::Vector3f& p : s.list_points) points.push_back(t * p);
+  const Eigen::Vector3f eye = t.translation();
+  const PointNormals normals = EstimatePointNormals(points, s.single_viewpoint ? &eye : nullptr, eye, 12, cancel);
+  if (cancel.IsCancelled() || !(normals.spacing > 0.0f)) return nullptr;
+  const double spacing = normals.spacing;
+  const int every = voxel_m > 0.0 ? std::clamp(int(std::pow(0.5 * voxel_m / spacing, 2.0)), 1, 64) : 1;
+  auto discs = std::make_shared<ScanLayout::Discs>();
+  discs->radius = float(spacing * std::sqrt(double(every)));
+  for (std::size_t i = 0; i < points.size(); i += std::size_t(every)) {
+    if (normals.normal[i].isZero()) continue;
+    discs->points.push_back(points[i]);
+    discs->normals.push_back(normals.normal[i]);
+    discs->box.extend(points[i]);
+  }
+  return discs;
+}
+
 }  // namespace
 
 bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* surface_range, float* voxel_range) const {
@@ -120,14 +149,16 @@ bool RangeView::RangeAlong(const Eigen::Vector3f& x, float max_jump_m, float* su
   return true;
 }
 
-ScanLayout LayoutScan(const Scan& s, const Eigen::Vector3d& origin, bool with_blocks) {
+ScanLayout LayoutScan(const Scan& s, const Eigen::Vector3d& origin, bool with_blocks, double voxel_m,
+                      const CancelToken& cancel) {
   constexpr int kB = ScanLayout::kCellBlock, kReach = 8;  // the largest stride
   ScanLayout out;
   out.rows = s.rows, out.cols = s.cols;
   out.spacing = MedianSpacing(s);
-  out.valid = s.CountValid();
-  if (!with_blocks) return out;
+  out.valid = s.single_viewpoint ? s.CountValid() : 0;
   const Eigen::Isometry3f t = Shifted(s, origin);
+  out.discs = MakeDiscs(s, t, voxel_m, cancel);
+  if (!with_blocks || out.valid == 0) return out;
   const int block_cols = out.block_cols();
   out.blocks.assign(std::size_t(out.block_rows()) * block_cols, Eigen::AlignedBox3f());  // empty boxes
   for (int r = 0; r < s.rows; ++r) {
@@ -146,6 +177,7 @@ ScanLayout LayoutScan(const Scan& s, const Eigen::Vector3d& origin, bool with_bl
 Scan CropScan(const Scan& scan, int r0, int r1, int c0, int c1) {
   Scan out;
   out.name = scan.name;
+  out.single_viewpoint = scan.single_viewpoint;
   out.rows = r1 - r0, out.cols = c1 - c0;
   out.world_from_scan = scan.world_from_scan;
   out.reference_world_from_scan = scan.reference_world_from_scan;
@@ -217,7 +249,7 @@ Eigen::Vector3f ClosestPointOnTriangle(const Eigen::Vector3f& p, const Eigen::Ve
 Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, double max_grazing_deg,
                                          const CancelToken& cancel, double voxel_m) {
   std::size_t total = 0;
-  for (const Scan* s : scans) total += s->CountValid();
+  for (const Scan* s : scans) total += s->CountPoints();
   if (total == 0) {
     std::string names;
     for (const Scan* s : scans) names += (names.empty() ? "" : ", ") + s->name;
@@ -229,7 +261,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<const Scan*>& scans, 
   std::vector<ScanLayout> layouts(scans.size());
   std::vector<ScanPiece> pieces(scans.size());
   for (std::size_t i = 0; i < scans.size(); ++i) {
-    layouts[i] = LayoutScan(*scans[i], origin, false);
+    layouts[i] = LayoutScan(*scans[i], origin, false, voxel_m, cancel);
     pieces[i].cells = std::shared_ptr<const Scan>(scans[i], [](const Scan*) {});  // not owned
     pieces[i].layout = &layouts[i];
   }
@@ -243,7 +275,8 @@ Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, c
   out.origin = origin;
   if (!keep) {
     std::size_t total = 0;
-    for (const ScanPiece& piece : pieces) total += piece.cells->CountValid();
+    for (const ScanPiece& piece : pieces)
+      total += piece.layout->valid + (piece.layout->discs ? piece.layout->discs->points.size() : 0);
     out.points.reserve(total);
   }
   const float cos_grazing = float(std::cos(max_grazing_deg * M_PI / 180.0));
@@ -258,8 +291,21 @@ Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, c
     const Eigen::Isometry3f t = Shifted(s, origin);
     const Eigen::Vector3f eye = t.translation();
     out.scanner.push_back(eye);
+    out.viewpoint.push_back(s.single_viewpoint);
+    out.disc_radius.push_back(layout.discs ? layout.discs->radius : 0.0f);
     out.scan_begin.push_back(out.points.size());
     out.views.push_back(MakeView(s, t));
+    if (layout.discs) {
+      const ScanLayout::Discs& discs = *layout.discs;
+      for (std::size_t k = 0; k < discs.points.size(); ++k) {
+        if (keep && !keep->contains(discs.points[k])) continue;
+        const int v = int(out.points.size());
+        out.points.push_back(discs.points[k]);
+        out.patches.push_back({{v, v, v}, discs.normals[k], int(si)});
+      }
+      out.max_patch_radius = std::max(out.max_patch_radius, double(discs.radius));
+    }
+    if (layout.valid == 0) continue;  // no cell triangulated (ScanLayout)
     const double spacing = layout.spacing;
     const int stride = Stride(spacing, voxel_m);
     const float max_edge2 = float(std::pow(8.0 * spacing * stride, 2));
@@ -363,8 +409,10 @@ void RangePatches::BuildHash(double cell_m) {
     const Patch& p = patches[i];
     const Eigen::Vector3f &a = points[p.v[0]], &b = points[p.v[1]], &c = points[p.v[2]];
     centroid[i] = (a + b + c) / 3.0f;
-    radius[i] = std::max({(a - centroid[i]).norm(), (b - centroid[i]).norm(), (c - centroid[i]).norm()});
-    const Eigen::Vector3f lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    radius[i] = p.disc() ? disc_radius[p.scan]
+                         : std::max({(a - centroid[i]).norm(), (b - centroid[i]).norm(), (c - centroid[i]).norm()});
+    const Eigen::Vector3f reach = Eigen::Vector3f::Constant(p.disc() ? radius[i] : 0.0f);
+    const Eigen::Vector3f lo = a.cwiseMin(b).cwiseMin(c) - reach, hi = a.cwiseMax(b).cwiseMax(c) + reach;
     const int x0 = int(std::floor(lo.x() * inv)), x1 = int(std::floor(hi.x() * inv));
     const int y0 = int(std::floor(lo.y() * inv)), y1 = int(std::floor(hi.y() * inv));
     const int z0 = int(std::floor(lo.z() * inv)), z1 = int(std::floor(hi.z() * inv));
@@ -373,6 +421,22 @@ void RangePatches::BuildHash(double cell_m) {
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) hash[BlockKey{x, y, z}].push_back(int(i));
   }
+}
+
+Eigen::Vector3f RangePatches::Closest(int id, const Eigen::Vector3f& x) const {
+  const Patch& p = patches[id];
+  const Eigen::Vector3f& a = points[p.v[0]];
+  if (!p.disc()) return ClosestPointOnTriangle(x, a, points[p.v[1]], points[p.v[2]]);
+  Eigen::Vector3f along = (x - a) - (x - a).dot(p.normal) * p.normal;  // in the disc's plane
+  const float r = disc_radius[p.scan], len = along.norm();
+  if (len > r) along *= r / len;
+  return a + along;
+}
+
+float RangePatches::SightCosine(const Patch& p, const Eigen::Vector3f& at, const Eigen::Vector3f& dir) const {
+  if (!viewpoint[p.scan]) return 1.0f;
+  const Eigen::Vector3f los = (at - scanner[p.scan]).normalized();
+  return std::max(std::abs(los.dot(dir)), 0.2f);
 }
 
 void RangePatches::Candidates(const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const {

@@ -17,20 +17,13 @@ namespace scanreg::pipeline {
 
 namespace {
 
-// Leaves out of `scan` the cells on moving objects and the points beyond the maximum range: marked
-// invalid. The merge fuses range images along their lines of sight, so a scan's points off its
-// grid (list_points: a cloud seen from several places) are not merged; a warning says how many.
+// Leaves out of `scan` the cells on moving objects and the cells beyond the maximum range: marked
+// invalid. Listed points (Scan::list_points) stay, and a cloud seen from several places keeps every
+// point: its range from its origin means nothing (issue 34, item 2).
 void LeaveOut(Scan& scan, const std::vector<std::uint32_t>& moving, double max_range_m) {
-  if (!scan.list_points.empty()) {
-    LogWarning("merge: scan '" + scan.name + "': " + std::to_string(scan.list_points.size()) +
-               " points without a cell of its grid (seen from elsewhere than its origin) are not in the merged "
-               "surface, which fuses range images along their lines of sight; export-clouds keeps them");
-    scan.list_points.clear();
-    scan.list_reflectance.clear();
-  }
   for (std::uint32_t c : moving)
     if (c < scan.size()) scan.valid[c] = 0;
-  if (max_range_m > 0.0) {
+  if (max_range_m > 0.0 && scan.single_viewpoint) {
     const double max2 = max_range_m * max_range_m;
     for (std::size_t c = 0; c < scan.size(); ++c)
       if (scan.valid[c] && scan.points[c].squaredNorm() > max2) scan.valid[c] = 0;
