@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 #include "core/merge/point_normals.h"
 
@@ -93,25 +94,51 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
   return true;
 }
 
-// The discs of a scan at t (ScanLayout::Discs), or null.
-std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::Isometry3f& t, double voxel_m,
-                                                   const CancelToken& cancel) {
-  const bool every_point = !s.single_viewpoint;
-  if (s.list_points.empty() && !every_point) return nullptr;
+// The points of `s` that become discs, at t: its listed points, and every point of a cloud seen
+// from several places; where they lie denser than half a voxel, the centroid of each half-voxel
+// cube instead: a merged or mobile-mapping cloud holds hundreds of points per voxel near its
+// stations. Measured (`scanreg-bench --section lists`: 21.6 M points, 5 cm voxel) against keeping
+// every m-th point by the median spacing: 260 s against 249 s, 7.39 M vertices against 5.54 M (fewer
+// holes where the cloud is sparse), peak 5.7 GB against 6.9 GB; quarter-voxel cubes: 475 s.
+std::vector<Eigen::Vector3f> DiscPoints(const Scan& s, const Eigen::Isometry3f& t, double voxel_m) {
   std::vector<Eigen::Vector3f> points;
+  const bool every_point = !s.single_viewpoint;
   points.reserve(s.list_points.size() + (every_point ? s.CountValid() : 0));
   if (every_point)
     for (std::size_t i = 0; i < s.size(); ++i)
       if (s.valid[i]) points.push_back(t * s.points[i]);
   for (const Eigen::Vector3f& p : s.list_points) points.push_back(t * p);
+  if (!(voxel_m > 0.0)) return points;
+  const double cell = 0.5 * voxel_m;
+  std::unordered_map<BlockKey, std::uint32_t, BlockKeyHash> index;  // cube -> its centroid's slot
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<std::uint32_t> count;
+  index.reserve(points.size() / 4);
+  for (const Eigen::Vector3f& p : points) {
+    const BlockKey key{int(std::floor(p.x() / cell)), int(std::floor(p.y() / cell)), int(std::floor(p.z() / cell))};
+    const auto [it, added] = index.try_emplace(key, std::uint32_t(sum.size()));
+    if (added) sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
+    sum[it->second] += p.cast<double>();
+    ++count[it->second];
+  }
+  if (sum.size() == points.size()) return points;  // no cube holds two: as they are
+  points.clear();
+  for (std::size_t k = 0; k < sum.size(); ++k) points.push_back((sum[k] / double(count[k])).cast<float>());
+  points.shrink_to_fit();
+  return points;
+}
+
+// The discs of a scan at t (ScanLayout::Discs), or null.
+std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::Isometry3f& t, double voxel_m,
+                                                   const CancelToken& cancel) {
+  if (s.list_points.empty() && s.single_viewpoint) return nullptr;
+  const std::vector<Eigen::Vector3f> points = DiscPoints(s, t, voxel_m);
   const Eigen::Vector3f eye = t.translation();
   const PointNormals normals = EstimatePointNormals(points, s.single_viewpoint ? &eye : nullptr, eye, 12, cancel);
   if (cancel.IsCancelled() || !(normals.spacing > 0.0f)) return nullptr;
-  const double spacing = normals.spacing;
-  const int every = voxel_m > 0.0 ? std::clamp(int(std::pow(0.5 * voxel_m / spacing, 2.0)), 1, 64) : 1;
   auto discs = std::make_shared<ScanLayout::Discs>();
-  discs->radius = float(spacing * std::sqrt(double(every)));
-  for (std::size_t i = 0; i < points.size(); i += std::size_t(every)) {
+  discs->radius = normals.spacing;
+  for (std::size_t i = 0; i < points.size(); ++i) {
     if (normals.normal[i].isZero()) continue;
     discs->points.push_back(points[i]);
     discs->normals.push_back(normals.normal[i]);

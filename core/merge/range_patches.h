@@ -90,7 +90,7 @@ struct RangePatches {
 // not triangulated and `valid` is 0. Measured on two stations merged into one cloud (consensus,
 // 8 cm voxel): its cells triangulated 7.4 % spurious and 44 % holes; discs 0.1 % and 21 %, the two
 // stations' own merge 0.1 % and 17 %. Normals from the 12 nearest points (point_normals.h); a list
-// much denser than the voxel is thinned (every m-th point, the radius grown by sqrt(m)).
+// denser than half a voxel is replaced by the centroid of each half-voxel cube.
 struct ScanLayout {
   static constexpr int kCellBlock = 16;
   int rows = 0, cols = 0;
