@@ -26,6 +26,12 @@ void Scan::Clear(int row, int col) {
   points[i].setZero();
   reflectance[i] = 0.0f;
   valid[i] = 0;
+  if (HasColour()) colour[i] = Rgb{0, 0, 0};
+}
+
+void Scan::AddColour() {
+  colour.assign(points.size(), Rgb{0, 0, 0});
+  list_colour.assign(list_points.size(), Rgb{0, 0, 0});
 }
 
 std::size_t Scan::CountValid() const {
@@ -53,6 +59,12 @@ Status Scan::Validate() const {
   if (!angles.empty() && (angles.azimuth.size() != static_cast<std::size_t>(cols) ||
                           angles.elevation.size() != static_cast<std::size_t>(rows))) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': angular grid does not match its size");
+  }
+  if (!colour.empty() && (colour.size() != n || list_colour.size() != list_points.size())) {
+    return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its colours and points differ in number");
+  }
+  if (colour.empty() && !list_colour.empty()) {
+    return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its listed points have colours, its grid none");
   }
   if (list_reflectance.size() != list_points.size()) {
     return MakeError(ErrorCode::kInvalidArgument,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -23,7 +24,10 @@ struct AngularGrid {
   bool empty() const { return azimuth.empty() || elevation.empty(); }
 };
 
-// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid). Points stay local to the
+// A point's colour, 8 bits a channel (red, green, blue), as a scanner's camera gives it.
+using Rgb = std::array<std::uint8_t, 3>;
+
+// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), and 3 more with colour. Points stay local to the
 // scanner (float is plenty within a few km); the pose is double, so UTM-sized coordinates keep
 // their precision.
 struct Scan {
@@ -45,6 +49,10 @@ struct Scan {
   // with the grid's points (ForEachPoint); the steps that need a range image use the grid.
   std::vector<Eigen::Vector3f> list_points;
   std::vector<float> list_reflectance;  // one per list point
+  // Colour where the file gave one (PTX r g b, PLY red green blue, PCD rgb, E57 colorRed..., LAS RGB):
+  // then one per cell (empty cells black) and one per listed point; both empty otherwise.
+  std::vector<Rgb> colour;
+  std::vector<Rgb> list_colour;
   // The grid's points were all seen from the scanner origin. False for a cloud seen from several
   // places: its grid is only an index, and no evidence is drawn from free space "seen" from it.
   bool single_viewpoint = true;
@@ -60,6 +68,10 @@ struct Scan {
   void Set(int row, int col, const Eigen::Vector3f& p, float refl);
   void Clear(int row, int col);
 
+  bool HasColour() const { return !colour.empty(); }
+  // Gives the scan colour: every cell and listed point black until set.
+  void AddColour();
+
   std::size_t CountValid() const;  // the grid's points
   std::size_t CountPoints() const { return CountValid() + list_points.size(); }  // every point
   // Visits every point, the grid's valid cells first (row-major), then the list: f(point, reflectance).
@@ -72,7 +84,8 @@ struct Scan {
   // Unit line of sight of a cell, scanner frame: from the angular grid when known, else the
   // direction to the cell's point (zero vector for an empty cell without angles).
   Eigen::Vector3f LineOfSight(int row, int col) const;
-  // Checks that the arrays agree with rows x cols and that every valid point is finite.
+  // Checks that the arrays agree with rows x cols (the colour too, when there is one) and that every
+  // valid point is finite.
   Status Validate() const;
 };
 

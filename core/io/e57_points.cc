@@ -14,7 +14,23 @@ constexpr int kProgressSteps = 40;
 constexpr std::uint64_t kChunk = 1 << 20;  // logical bytes read at a time
 constexpr double kFarAway = 1e4;           // metres; float keeps ~1 mm up to here
 
-enum class Role { kX, kY, kZ, kRange, kAzimuth, kElevation, kIntensity, kRow, kColumn, kInvalid, kReturn, kOther };
+enum class Role {
+  kX,
+  kY,
+  kZ,
+  kRange,
+  kAzimuth,
+  kElevation,
+  kIntensity,
+  kRed,
+  kGreen,
+  kBlue,
+  kRow,
+  kColumn,
+  kInvalid,
+  kReturn,
+  kOther
+};
 
 struct FieldStream {
   const Field* field = nullptr;
@@ -42,6 +58,9 @@ std::vector<FieldStream> MakeStreams(const ScanDesc& scan) {
                                            : Role::kOther;
     }
     if (n == "intensity") s.role = Role::kIntensity;
+    if (n == "colorRed") s.role = Role::kRed;
+    if (n == "colorGreen") s.role = Role::kGreen;
+    if (n == "colorBlue") s.role = Role::kBlue;
     if (n == "rowIndex") s.role = Role::kRow;
     if (n == "columnIndex") s.role = Role::kColumn;
     if (n == invalid_name) s.role = Role::kInvalid;
@@ -165,6 +184,12 @@ class RecordDecoder {
         case Role::kIntensity:
           out_.intensity[i] = static_cast<float>(value);
           break;
+        case Role::kRed:
+        case Role::kGreen:
+        case Role::kBlue:
+          if (!out_.colour.empty())
+            out_.colour[i][s.role == Role::kRed ? 0 : s.role == Role::kGreen ? 1 : 2] = float(value);
+          break;
         case Role::kRow:
         case Role::kColumn: {
           if (raw < std::numeric_limits<std::int32_t>::min() || raw > std::numeric_limits<std::int32_t>::max()) {
@@ -258,6 +283,8 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
     if (s.role == Role::kRow) out.row.resize(n);
     if (s.role == Role::kColumn) out.column.resize(n);
   }
+  if (scan.FieldIndex("colorRed") >= 0 && scan.FieldIndex("colorGreen") >= 0 && scan.FieldIndex("colorBlue") >= 0)
+    out.colour.assign(n, Eigen::Vector3f::Zero());
   PacketParser parser(streams, where);
   RecordDecoder decoder(streams, scan.FieldIndex("cartesianX") < 0, where, out);
   const std::size_t report_every = std::max<std::size_t>(1, n / kProgressSteps);

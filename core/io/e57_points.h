@@ -28,6 +28,7 @@ struct PointRecords {
   // 0 where the invalid state says there are no coordinates, or for second and later returns.
   std::vector<std::uint8_t> valid;
   std::vector<float> intensity;           // as stored; empty when the scan has none
+  std::vector<Eigen::Vector3f> colour;    // colorRed, colorGreen, colorBlue as stored; empty without all three
   std::vector<std::int32_t> row, column;  // rowIndex / columnIndex; empty when the scan has no grid
 };
 

@@ -90,6 +90,27 @@ std::pair<double, double> IntensityRange(const e57::ScanDesc& desc, const e57::P
   return {lo, hi};
 }
 
+// Maps stored colour to 0..255: the scan's colorLimits, else the red field's limits, else 0..255
+// (the limits may be absent; an 8-bit camera's values are then taken as they are).
+std::pair<double, double> ColourRange(const e57::ScanDesc& desc) {
+  if (desc.colour_limits) return *desc.colour_limits;
+  const int f = desc.FieldIndex("colorRed");
+  if (f >= 0) {
+    if (auto limits = desc.fields[f].ValueLimits(); limits && limits->second > limits->first) return *limits;
+  }
+  return {0.0, 255.0};
+}
+
+Rgb ToRgb(const Eigen::Vector3f& stored, const std::pair<double, double>& range) {
+  const double scale = 255.0 / (range.second - range.first);
+  Rgb out;
+  for (int c = 0; c < 3; ++c) {
+    const double v = std::isfinite(stored[c]) ? (stored[c] - range.first) * scale : 0.0;
+    out[c] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0) + 0.5);
+  }
+  return out;
+}
+
 Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& desc, std::string name,
                         const std::string& where, const std::pair<double, double>& intensity_range) {
   std::int64_t row_min = std::numeric_limits<std::int64_t>::max(), row_max = std::numeric_limits<std::int64_t>::min();
@@ -125,6 +146,8 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
                                                  " points; the row/column indices are corrupt");
   }
   Scan scan(std::move(name), int(rows), int(cols));
+  const auto colour_range = ColourRange(desc);
+  if (!records.colour.empty()) scan.AddColour();
   const double scale =
       intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
@@ -136,18 +159,22 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
     if (scan.IsValid(r, c)) {  // the first point of a cell takes it; later returns stay as a list
       scan.list_points.push_back(records.xyz[i]);
       scan.list_reflectance.push_back(refl);
+      if (scan.HasColour()) scan.list_colour.push_back(ToRgb(records.colour[i], colour_range));
       continue;
     }
     scan.Set(r, c, records.xyz[i], refl);
+    if (scan.HasColour()) scan.colour[scan.Index(r, c)] = ToRgb(records.colour[i], colour_range);
   }
   EstimateAngularGrid(scan);
   return scan;
 }
 
-Expected<Scan> CloudScan(const e57::PointRecords& records, std::string name, const std::string& where,
-                         const std::pair<double, double>& intensity_range) {
+Expected<Scan> CloudScan(const e57::PointRecords& records, const e57::ScanDesc& desc, std::string name,
+                         const std::string& where, const std::pair<double, double>& intensity_range) {
   std::vector<Eigen::Vector3f> points;
   std::vector<float> reflectance;
+  std::vector<Rgb> colour;
+  const auto colour_range = ColourRange(desc);
   const double scale =
       intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
@@ -156,8 +183,9 @@ Expected<Scan> CloudScan(const e57::PointRecords& records, std::string name, con
     reflectance.push_back(records.intensity.empty() || scale == 0.0
                               ? 0.5f
                               : float((records.intensity[i] - intensity_range.first) * scale));
+    if (!records.colour.empty()) colour.push_back(ToRgb(records.colour[i], colour_range));
   }
-  return OrganizeCloudByDensity(points, reflectance, std::move(name), where);
+  return OrganizeCloudByDensity(points, reflectance, std::move(name), where, colour);
 }
 
 }  // namespace
@@ -206,7 +234,7 @@ Expected<std::vector<Scan>> ReadE57(const std::filesystem::path& path, const E57
     const auto intensity_range = IntensityRange(desc, *records);
     std::string name = ScanName(desc, i, descs.size(), path);
     Expected<Scan> scan = desc.HasGrid() ? GridScan(*records, desc, std::move(name), where, intensity_range)
-                                         : CloudScan(*records, std::move(name), where, intensity_range);
+                                         : CloudScan(*records, desc, std::move(name), where, intensity_range);
     if (!scan) return scan.error();
     scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(records->shift);
     scans.push_back(std::move(*scan));

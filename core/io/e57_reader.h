@@ -2,7 +2,8 @@
 // (rowIndex/columnIndex) keep their grid: file row r, column c is Scan row r - rowMinimum,
 // column c - columnMinimum. Scans without a grid are organized like PLY/PCD clouds
 // (OrganizeCloudByDensity). Intensity, normalised to [0, 1] with the scan's intensityLimits (or
-// the field's limits), becomes reflectance; without intensity reflectance is 0.5. The pose
+// the field's limits), becomes reflectance; without intensity reflectance is 0.5. colorRed/Green/Blue
+// become the scan's colour, mapped to 0..255 with colorLimits (or the fields' limits). The pose
 // becomes world_from_scan. Points with a non-zero cartesian/sphericalInvalidState are left out;
 // a later point of a grid cell (a second return) joins the scan's list_points.
 #pragma once

@@ -29,17 +29,20 @@ struct WrittenScan {
   std::uint64_t section_offset = 0;  // physical
   std::uint64_t records = 0;
   bool structured = true;  // rowIndex/columnIndex written: the scan has no point off its grid
+  bool colour = false;     // colorRed, colorGreen, colorBlue written (8 bits each)
   int row_bits = 0, col_bits = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
   double intensity_lo = 0.0, intensity_hi = 1.0;
 };
 
-// x, y, z, intensity, and rowIndex, columnIndex when structured.
-int Streams(bool structured) { return structured ? 6 : 4; }
+// x, y, z, intensity, then colorRed, colorGreen, colorBlue with colour, then rowIndex, columnIndex
+// when structured.
+int Streams(const WrittenScan& info) { return 4 + (info.colour ? 3 : 0) + (info.structured ? 2 : 0); }
 
-std::uint64_t PacketLength(std::size_t records, bool structured, int row_bits, int col_bits) {
-  const std::uint64_t index_bytes = structured ? (records * row_bits + 7) / 8 + (records * col_bits + 7) / 8 : 0;
-  const std::uint64_t bytes = 6 + 2 * Streams(structured) + 4 * 4 * records + index_bytes;
+std::uint64_t PacketLength(std::size_t records, const WrittenScan& info) {
+  const std::uint64_t index_bytes =
+      info.structured ? (records * info.row_bits + 7) / 8 + (records * info.col_bits + 7) / 8 : 0;
+  const std::uint64_t bytes = 6 + 2 * Streams(info) + 4 * 4 * records + (info.colour ? 3 * records : 0) + index_bytes;
   return (bytes + 3) / 4 * 4;
 }
 
@@ -62,13 +65,13 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) cells.push_back(i);
   info->structured = scan.list_points.empty();
+  info->colour = scan.HasColour();
   info->records = cells.size() + scan.list_points.size();
   info->row_bits = e57::BitWidth(0, scan.rows - 1);
   info->col_bits = e57::BitWidth(0, scan.cols - 1);
   std::uint64_t section_length = e57::kSectionHeaderSize;
   for (std::size_t b = 0; b < info->records; b += kRecordsPerPacket) {
-    section_length +=
-        PacketLength(std::min<std::size_t>(kRecordsPerPacket, info->records - b), info->structured, info->row_bits, info->col_bits);
+    section_length += PacketLength(std::min<std::size_t>(kRecordsPerPacket, info->records - b), *info);
   }
 
   if (Status s = w.Align(8); !s) return s;
@@ -84,7 +87,8 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   float ilo = 0.0f, ihi = 1.0f;
   info->lo = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : 1e300);
   info->hi = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : -1e300);
-  std::string streams[4], packet;
+  std::string streams[7], packet;  // x y z intensity red green blue
+  const int value_streams = info->colour ? 7 : 4;
   for (std::size_t b = 0; b < info->records; b += kRecordsPerPacket) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, target + ": writing cancelled");
     if ((b / kRecordsPerPacket) % kPacketsPerReport == 0) {
@@ -99,6 +103,10 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
       const float refl = on_grid ? scan.reflectance[cells[k]] : scan.list_reflectance[k - cells.size()];
       for (int d = 0; d < 3; ++d) PutFloat(streams[d], p[d]);
       PutFloat(streams[3], refl);
+      if (info->colour) {
+        const Rgb& c = on_grid ? scan.colour[cells[k]] : scan.list_colour[k - cells.size()];
+        for (int ch = 0; ch < 3; ++ch) streams[4 + ch].push_back(static_cast<char>(c[ch]));
+      }
       ilo = std::min(ilo, refl), ihi = std::max(ihi, refl);
       info->lo = info->lo.cwiseMin(p.cast<double>()), info->hi = info->hi.cwiseMax(p.cast<double>());
       if (!info->structured) continue;
@@ -106,18 +114,18 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
       cols.Write(std::uint64_t(cells[k] % scan.cols), info->col_bits);
     }
     const std::string row_bytes = rows.Take(true), col_bytes = cols.Take(true);
-    const std::uint64_t length = PacketLength(n, info->structured, info->row_bits, info->col_bits);
+    const std::uint64_t length = PacketLength(n, *info);
     packet.clear();
     packet.push_back(static_cast<char>(e57::kDataPacket));
     packet.push_back('\0');
     PutLe(packet, length - 1, 2);
-    PutLe(packet, Streams(info->structured), 2);
-    for (const std::string& s : streams) PutLe(packet, s.size(), 2);
+    PutLe(packet, Streams(*info), 2);
+    for (int v = 0; v < value_streams; ++v) PutLe(packet, streams[v].size(), 2);
     if (info->structured) {
       PutLe(packet, row_bytes.size(), 2);
       PutLe(packet, col_bytes.size(), 2);
     }
-    for (const std::string& s : streams) packet += s;
+    for (int v = 0; v < value_streams; ++v) packet += streams[v];
     packet += row_bytes;
     packet += col_bytes;
     packet.resize(length, '\0');
@@ -187,6 +195,13 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
   pugi::xml_node limits = Element(child, "intensityLimits", "Structure");
   FloatElement(limits, "intensityMinimum", info.intensity_lo);
   FloatElement(limits, "intensityMaximum", info.intensity_hi);
+  if (info.colour) {
+    pugi::xml_node colour = Element(child, "colorLimits", "Structure");
+    for (const char* name : {"colorRed", "colorGreen", "colorBlue"}) {
+      IntegerElement(colour, (std::string(name) + "Minimum").c_str(), 0);
+      IntegerElement(colour, (std::string(name) + "Maximum").c_str(), 255);
+    }
+  }
   pugi::xml_node box = Element(child, "cartesianBounds", "Structure");
   const char* names[3][2] = {{"xMinimum", "xMaximum"}, {"yMinimum", "yMaximum"}, {"zMinimum", "zMaximum"}};
   for (int d = 0; d < 3; ++d) FloatElement(box, names[d][0], info.lo[d]), FloatElement(box, names[d][1], info.hi[d]);
@@ -197,6 +212,8 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
   for (const char* name : {"cartesianX", "cartesianY", "cartesianZ", "intensity"}) {
     Element(prototype, name, "Float").append_attribute("precision") = "single";
   }
+  for (const char* name : {"colorRed", "colorGreen", "colorBlue"})
+    if (info.colour) PrototypeInteger(prototype, name, 255);
   if (info.structured) {
     PrototypeInteger(prototype, "rowIndex", scan.rows - 1);
     PrototypeInteger(prototype, "columnIndex", scan.cols - 1);

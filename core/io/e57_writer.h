@@ -1,6 +1,7 @@
 // Writing E57 (ASTM E2807) files that keep what registration needs: every scan with its full
 // double pose (rotation quaternion + translation), its grid (rowIndex/columnIndex with
-// indexBounds) and its reflectance (intensity with intensityLimits 0..1). A scan with points off
+// indexBounds), its reflectance (intensity with intensityLimits 0..1) and its colour when it has
+// one (colorRed/Green/Blue, 8-bit Integers, colorLimits 0..255). A scan with points off
 // its grid (list_points) is written unstructured — every point, no rowIndex/columnIndex — since an
 // E57 scan's records are either all indexed or none.
 //

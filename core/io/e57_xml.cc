@@ -63,6 +63,12 @@ class ScanParser {
         return s.error();
       if (hi > lo) scan.intensity_limits = std::make_pair(lo, hi);
     }
+    if (const pugi::xml_node l = node.child("colorLimits")) {
+      double lo = 0, hi = 0;
+      if (Status s = Number(l.child("colorRedMinimum"), "colorLimits/colorRedMinimum", 0.0, &lo); !s) return s.error();
+      if (Status s = Number(l.child("colorRedMaximum"), "colorLimits/colorRedMaximum", 0.0, &hi); !s) return s.error();
+      if (hi > lo) scan.colour_limits = std::make_pair(lo, hi);
+    }
     return scan;
   }
 

@@ -47,6 +47,7 @@ struct ScanDesc {
   std::vector<Field> fields;
   std::optional<IndexBounds> index_bounds;
   std::optional<std::pair<double, double>> intensity_limits;
+  std::optional<std::pair<double, double>> colour_limits;  // colorLimits: colorRedMinimum, colorRedMaximum
 
   // Index of the named field in `fields`, or -1.
   int FieldIndex(std::string_view field_name) const;

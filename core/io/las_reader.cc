@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <array>
-#include <new>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <new>
 
 #include "core/io/organize_default.h"
 
@@ -44,25 +44,32 @@ int LasGpsTimeOffset(int point_format) {
 
 int LasRgbOffset(int point_format) {
   switch (point_format) {
-    case 2: return 20;
-    case 3: case 5: return 28;
-    case 7: case 8: case 10: return 30;
-    default: return -1;
+    case 2:
+      return 20;
+    case 3:
+    case 5:
+      return 28;
+    case 7:
+    case 8:
+    case 10:
+      return 30;
+    default:
+      return -1;
   }
 }
 
-Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSink& progress, const CancelToken& cancel) {
+Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSink& progress,
+                                  const CancelToken& cancel) {
   const std::string name = path.string();
-  const auto bad = [&](const std::string& what) {
-    return MakeError(ErrorCode::kParseError, name + ": " + what);
-  };
+  const auto bad = [&](const std::string& what) { return MakeError(ErrorCode::kParseError, name + ": " + what); };
   std::error_code ec;
   const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
   if (ec) return MakeError(ErrorCode::kIoError, name + ": cannot read the file size: " + ec.message());
   std::ifstream in(path, std::ios::binary);
   if (!in) return MakeError(ErrorCode::kIoError, name + ": cannot open the file; check that it exists and is readable");
   if (file_size < static_cast<std::uintmax_t>(kHeaderSize12)) {
-    return bad("only " + std::to_string(file_size) + " bytes: shorter than a LAS header (227 bytes); the file is "
+    return bad("only " + std::to_string(file_size) +
+               " bytes: shorter than a LAS header (227 bytes); the file is "
                "truncated or not LAS");
   }
   std::vector<char> h(kHeaderSize14, 0);
@@ -122,7 +129,8 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
     out.header_max[a] = Get<double>(h, 179 + 16 * a);
     out.header_min[a] = Get<double>(h, 187 + 16 * a);
     if (!std::isfinite(out.scale[a]) || out.scale[a] == 0.0 || !std::isfinite(out.offset[a])) {
-      return bad(std::string("the ") + "xyz"[a] + " scale factor or offset is zero or not a number; the header is "
+      return bad(std::string("the ") + "xyz"[a] +
+                 " scale factor or offset is zero or not a number; the header is "
                  "damaged");
     }
   }
@@ -183,7 +191,8 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
                                 Get<std::int32_t>(buffer, at + 8));
       out.xyz[first + k] = raw.cwiseProduct(out.scale) + out.offset;
       if (!out.xyz[first + k].allFinite()) {
-        return bad("point " + std::to_string(first + k) + " is not a finite number after scale and offset; the "
+        return bad("point " + std::to_string(first + k) +
+                   " is not a finite number after scale and offset; the "
                    "header's scale factors are damaged");
       }
       out.intensity[first + k] = Get<std::uint16_t>(buffer, at + 12);
@@ -219,7 +228,16 @@ Expected<Scan> ReadLas(const std::filesystem::path& path, ProgressSink& progress
   if (brightest > 0)
     for (std::size_t k = 0; k < reflectance.size(); ++k) reflectance[k] = las->intensity[k] / full_scale;
   las->xyz = {};
-  Expected<Scan> scan = OrganizeCloudByDensity(points, reflectance, path.stem().string(), path.string());
+  // 16 bits a channel, by the specification; files whose channels never exceed 255 hold 8-bit values.
+  // The high byte serves writers that scale 8 bits by 256 and those that scale by 257.
+  std::vector<Rgb> colour(las->rgb.size());
+  std::uint16_t strongest = 0;
+  for (const auto& c : las->rgb) strongest = std::max({strongest, c[0], c[1], c[2]});
+  const int shift = strongest <= 255 ? 0 : 8;
+  for (std::size_t k = 0; k < colour.size(); ++k)
+    for (int c = 0; c < 3; ++c) colour[k][c] = static_cast<std::uint8_t>(las->rgb[k][c] >> shift);
+  las->rgb = {};
+  Expected<Scan> scan = OrganizeCloudByDensity(points, reflectance, path.stem().string(), path.string(), colour);
   if (!scan) return scan.error();
   scan->world_from_scan = Eigen::Isometry3d(Eigen::Translation3d(centre));
   return scan;

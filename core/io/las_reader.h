@@ -35,8 +35,8 @@ struct LasPoints {
   std::vector<std::uint16_t> intensity;  // one per point, as stored
   // Per point where the format has them (empty otherwise), as stored: GPS time (formats 1 and 3-10;
   // GPS week seconds or adjusted standard GPS time, as the header's global encoding says) and red,
-  // green, blue (formats 2, 3, 5, 7, 8, 10; 16 bits a channel). A Scan keeps intensity only (its
-  // grid model has no colour or time yet: issue 34, item 1).
+  // green, blue (formats 2, 3, 5, 7, 8, 10; 16 bits a channel). A Scan keeps the colour (8 bits a
+  // channel: the high byte, or the value itself when no channel exceeds 255), not the time.
   std::vector<double> gps_time;
   std::vector<std::array<std::uint16_t, 3>> rgb;
 };

@@ -74,17 +74,26 @@ Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress
       cloud[i].intensity = 0.5f;
     }
   }
+  std::vector<Rgb> colour;  // from an rgb or rgba field (PCL packs 8-bit channels)
+  if (HasField(blob, "rgb") || HasField(blob, "rgba")) {
+    pcl::PointCloud<pcl::PointXYZRGB> rgb;
+    pcl::fromPCLPointCloud2(blob, rgb);
+    colour.reserve(rgb.size());
+    for (const pcl::PointXYZRGB& p : rgb) colour.push_back(Rgb{p.r, p.g, p.b});
+  }
   blob = pcl::PCLPointCloud2();  // free memory early
   const std::string name = path.stem().string();
   Scan scan;
   if (cloud.height > 1) {
     scan = Scan(name, static_cast<int>(cloud.height), static_cast<int>(cloud.width));
+    if (!colour.empty()) scan.AddColour();
     for (int r = 0; r < scan.rows; ++r) {
       for (int c = 0; c < scan.cols; ++c) {
         const pcl::PointXYZI& p = cloud.at(c, r);
         const Eigen::Vector3f q(p.x, p.y, p.z);
         if (!q.allFinite() || q.isZero()) continue;
         scan.Set(r, c, q, std::isfinite(p.intensity) ? p.intensity : 0.5f);
+        if (!colour.empty()) scan.colour[scan.Index(r, c)] = colour[static_cast<std::size_t>(r) * scan.cols + c];
       }
     }
   } else {
@@ -96,7 +105,7 @@ Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress
       points.emplace_back(p.x, p.y, p.z);
       reflectance.push_back(std::isfinite(p.intensity) ? p.intensity : 0.5f);
     }
-    Expected<Scan> organized = OrganizeCloudByDensity(points, reflectance, name, path.string());
+    Expected<Scan> organized = OrganizeCloudByDensity(points, reflectance, name, path.string(), colour);
     if (!organized) return organized.error();
     scan = std::move(*organized);
   }
@@ -122,7 +131,8 @@ Status WritePcd(const std::filesystem::path& path, const Scan& scan, ProgressSin
       cloud.push_back(p);
     });
   } else {
-    cloud = pcl::PointCloud<pcl::PointXYZI>(static_cast<std::uint32_t>(scan.cols), static_cast<std::uint32_t>(scan.rows));
+    cloud =
+        pcl::PointCloud<pcl::PointXYZI>(static_cast<std::uint32_t>(scan.cols), static_cast<std::uint32_t>(scan.rows));
   }
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (int r = 0; r < scan.rows && scan.list_points.empty(); ++r) {

@@ -5,7 +5,8 @@
 // all-zero points are empty cells. Unorganized: organized by spherical projection around the
 // sensor origin with a step from the point density (OrganizeCloudByDensity). The PCD viewpoint
 // (sensor_origin_, sensor_orientation_) becomes world_from_scan; points stay in the sensor frame.
-// Reflectance = the intensity field when present, else 0.5. No angular grid for organized PCDs
+// Reflectance = the intensity field when present, else 0.5; colour from an rgb or rgba field. No
+// angular grid for organized PCDs
 // (they are often perspective cameras). The header is checked first (pcd_header.h): PCL trusts it;
 // PCL's own console messages are silenced, its failures become one error naming the file.
 #pragma once

@@ -155,6 +155,31 @@ float IntensityScale(PlyType type) {
   return 1.0f;
 }
 
+// The vertex properties holding red, green and blue, in that order (all -1 when one is missing).
+void ColourProperties(const PlyElement& vertex, int ic[3]) {
+  static const char* const kNames[][3] = {
+      {"red", "green", "blue"}, {"r", "g", "b"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}};
+  for (const auto& names : kNames) {
+    for (int c = 0; c < 3; ++c) ic[c] = vertex.FindProperty(names[c]);
+    if (ic[0] >= 0 && ic[1] >= 0 && ic[2] >= 0) return;
+  }
+  ic[0] = ic[1] = ic[2] = -1;
+}
+
+// To 0..255: 8-bit channels as they are, 16-bit ones / 257, floating point ones (0..1) x 255.
+double ColourScale(PlyType type) {
+  if (type == PlyType::kUint16) return 1.0 / 257.0;
+  if (type == PlyType::kFloat32 || type == PlyType::kFloat64) return 255.0;
+  return 1.0;
+}
+
+Rgb ToRgb(const double rgb[3]) {
+  Rgb out;
+  for (int c = 0; c < 3; ++c)
+    out[c] = static_cast<std::uint8_t>(std::clamp(std::isfinite(rgb[c]) ? rgb[c] : 0.0, 0.0, 255.0) + 0.5);
+  return out;
+}
+
 Expected<int> ObjInfoInt(const PlyHeader& header, const std::string& key, const std::filesystem::path& path) {
   auto it = header.obj_info.find(key);
   int v = 0;
@@ -197,6 +222,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   const Eigen::Isometry3d scan_from_world = world_from_scan.inverse();
   std::vector<Eigen::Vector3f> points;
   std::vector<float> intensity;
+  std::vector<Rgb> colour;
   std::vector<int> grid;  // vertex index per file cell, -1 = empty
   bool have_vertex = false, have_grid = false;
   long vertex_first_line = 0;
@@ -210,7 +236,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   for (const PlyElement& element : header->elements) {
     const bool is_vertex = element.name == "vertex";
     const bool is_grid = element.name == "range_grid";
-    int ix = -1, iy = -1, iz = -1, ii = -1;
+    int ix = -1, iy = -1, iz = -1, ii = -1, ic[3] = {-1, -1, -1};
     if (is_vertex) {
       ix = element.FindProperty("x"), iy = element.FindProperty("y"), iz = element.FindProperty("z");
       if (ix < 0 || iy < 0 || iz < 0) {
@@ -218,9 +244,11 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       }
       for (const char* name : {"intensity", "scalar_intensity", "reflectance", "confidence"})
         if (ii < 0) ii = element.FindProperty(name);
+      ColourProperties(element, ic);
       have_vertex = true;
       points.resize(element.count);
       if (ii >= 0) intensity.resize(element.count);
+      if (ic[0] >= 0) colour.resize(element.count);
       vertex_first_line = header->body_line + long(done);
     }
     if (is_grid) {
@@ -232,6 +260,8 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       grid.assign(element.count, -1);
     }
     const float scale = ii >= 0 ? IntensityScale(element.properties[ii].type) : 1.0f;
+    const double colour_scale = ic[0] >= 0 ? ColourScale(element.properties[ic[0]].type) : 1.0;
+    double rgb[3] = {0, 0, 0};
     const std::string what = is_vertex ? "a vertex" : is_grid ? "a range_grid cell" : "element '" + element.name + "'";
     double v[4] = {0, 0, 0, 0.5};
     for (std::size_t k = 0; k < element.count; ++k, ++done) {
@@ -279,10 +309,13 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
           v[2] = value;
         else if (p == ii)
           v[3] = value * scale;
+        else if (p == ic[0] || p == ic[1] || p == ic[2])
+          rgb[p == ic[0] ? 0 : p == ic[1] ? 1 : 2] = value * colour_scale;
       }
       const Eigen::Vector3d p(v[0], v[1], v[2]);
       points[k] = (points_in_world ? scan_from_world * p : p).cast<float>();
       if (ii >= 0) intensity[k] = float(v[3]);
+      if (ic[0] >= 0) colour[k] = ToRgb(rgb);
     }
   }
   if (!have_vertex) return MakeError(ErrorCode::kUnsupported, path.string() + ": the PLY file has no vertex element");
@@ -309,6 +342,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
                                                    std::to_string(*cols) + " columns");
     }
     scan = Scan(name, *rows, *cols);
+    if (!colour.empty()) scan.AddColour();
     for (int fr = 0; fr < *rows; ++fr) {
       for (int c = 0; c < *cols; ++c) {
         const int k = grid[static_cast<std::size_t>(fr) * *cols + c];
@@ -316,6 +350,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         if (Status s = check_finite(k); !s) return s.error();
         if (points[k].isZero()) continue;
         scan.Set(*rows - 1 - fr, c, points[k], intensity.empty() ? 0.5f : intensity[k]);
+        if (!colour.empty()) scan.colour[scan.Index(*rows - 1 - fr, c)] = colour[k];
       }
     }
     // Vertices no cell takes (later returns of a cell, points without a cell) stay as a list.
@@ -327,12 +362,13 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       if (!intensity.empty() && !std::isfinite(intensity[k])) continue;
       scan.list_points.push_back(points[k]);
       scan.list_reflectance.push_back(intensity.empty() ? 0.5f : intensity[k]);
+      if (!colour.empty()) scan.list_colour.push_back(colour[k]);
     }
     if (header->obj_info.count("scanreg_angular_grid")) EstimateAngularGrid(scan);
   } else {
     for (std::size_t k = 0; k < points.size(); ++k)
       if (Status s = check_finite(k); !s) return s.error();
-    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string());
+    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string(), colour);
     if (!organized) return organized.error();
     scan = std::move(*organized);
   }
@@ -346,7 +382,8 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   if (Status s = scan.Validate(); !s) return s;
   const std::size_t n_valid = scan.CountValid();
   if (n_valid + scan.list_points.size() > std::size_t(std::numeric_limits<std::int32_t>::max())) {
-    return MakeError(ErrorCode::kInvalidArgument, path.string() + ": more than 2^31 points do not fit one PLY range grid");
+    return MakeError(ErrorCode::kInvalidArgument,
+                     path.string() + ": more than 2^31 points do not fit one PLY range grid");
   }
   std::string header =
       "ply\nformat binary_little_endian 1.0\ncomment written by scanreg: x y z in world coordinates (metres); "
@@ -370,7 +407,9 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   header += "obj_info scanreg_points_in_world 1\n";
   header += "element vertex " + std::to_string(n_valid + scan.list_points.size()) +
             "\nproperty double x\nproperty double y\nproperty double z\nproperty float intensity\n";
-  if (grid) header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
+  if (scan.HasColour()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (grid)
+    header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";
 
   AtomicFile file(path);
@@ -391,6 +430,7 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
       const Eigen::Vector3d p = scan.world_from_scan * scan.points[i].cast<double>();
       chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
       chunk.append(reinterpret_cast<const char*>(&scan.reflectance[i]), sizeof(float));
+      if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.colour[i].data()), 3);
       index[static_cast<std::size_t>(fr) * scan.cols + c] = next++;
     }
     if (chunk.size() > (1 << 20)) {
@@ -402,6 +442,7 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
     const Eigen::Vector3d p = scan.world_from_scan * scan.list_points[k].cast<double>();
     chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
     chunk.append(reinterpret_cast<const char*>(&scan.list_reflectance[k]), sizeof(float));
+    if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.list_colour[k].data()), 3);
     if (chunk.size() > (1 << 20)) {
       if (Status s = file.Write(chunk); !s) return s;
       chunk.clear();

@@ -20,7 +20,9 @@
 namespace scanreg::io {
 
 // Vertex properties x, y, z (float or double) and optionally one of intensity, scalar_intensity,
-// reflectance, confidence (uchar values are divided by 255, ushort by 65535; default 0.5).
+// reflectance, confidence (uchar values are divided by 255, ushort by 65535; default 0.5), and
+// colour from red green blue (or r g b, diffuse_red ...: uchar as is, ushort / 257, float / double
+// in [0, 1] times 255).
 // `obj_info scanreg_world_from_scan <16 numbers, row-major>` sets the pose (identity otherwise);
 // with `obj_info scanreg_points_in_world 1` the points are in world coordinates and are taken back
 // to the scanner frame with that pose (in double). With a range_grid, the vertices no cell names
@@ -29,7 +31,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
 
 // Organized binary little-endian PLY: vertex x y z (double, WORLD coordinates: world_from_scan
 // applied, so that every other reader places the points where they are registered) and intensity
-// (float) of the valid cells, range_grid in the Stanford convention, obj_info num_cols / num_rows /
+// (float) of the valid cells, red green blue (uchar) when the scan has colour, range_grid in the Stanford convention, obj_info num_cols / num_rows /
 // scanreg_world_from_scan / scanreg_points_in_world 1 (and scanreg_angular_grid 1 when the scan had
 // angles; they are re-estimated on reading). A scan with points off its grid (list_points) is
 // written as a plain list of every point, without range_grid (PCL's reader keeps only the vertices

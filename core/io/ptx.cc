@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include "core/geometry/transform.h"
 #include "core/common/atomic_file.h"
+#include "core/geometry/transform.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::io {
@@ -125,7 +125,7 @@ Expected<Scan> ReadOneScan(LineReader& lines, std::string_view text, const std::
   const std::size_t report_every = std::max<std::size_t>(1, cells / kProgressSteps);
   std::size_t next_report = report_every;
   std::size_t done = 0;
-  float v[4];
+  float v[7];
   std::string_view line;
   for (int c = 0; c < cols; ++c) {
     for (int r = 0; r < rows; ++r, ++done) {
@@ -135,7 +135,7 @@ Expected<Scan> ReadOneScan(LineReader& lines, std::string_view text, const std::
         progress.Report(double(lines.offset()) / double(text.size()), "reading " + path.filename().string());
       }
       if (!lines.Next(&line)) return Truncated(path, lines.line_number() + 1, done, cells, scan_index);
-      const NumberParse p = ParseNumbers(line, v, 4);
+      const NumberParse p = ParseNumbers(line, v, 7);
       if (p.status == ParseStatus::kBadToken) {
         return ParseErr(path, lines.line_number(),
                         QuoteToken(p.token) + " is not a number; point lines must be `x y z intensity [r g b]`");
@@ -151,11 +151,16 @@ Expected<Scan> ReadOneScan(LineReader& lines, std::string_view text, const std::
                             " (point " + std::to_string(done + 1) + " of " + std::to_string(cells) + " of scan " +
                             std::to_string(scan_index + 1) + "); the file is damaged or the header's size is wrong");
       }
+      if (done == 0 && p.count >= 7) scan.AddColour();             // `x y z intensity r g b`: the scan has colour
       if (v[0] == 0.0f && v[1] == 0.0f && v[2] == 0.0f) continue;  // empty cell
       const std::size_t i = scan.Index(r, c);
       scan.points[i] = Eigen::Vector3f(v[0], v[1], v[2]);
       scan.reflectance[i] = v[3];
       scan.valid[i] = 1;
+      if (scan.HasColour() && p.count >= 7) {
+        for (int k = 0; k < 3; ++k)
+          scan.colour[i][k] = static_cast<std::uint8_t>(std::clamp(v[4 + k], 0.0f, 255.0f) + 0.5f);
+      }
     }
   }
   EstimateAngularGrid(scan);
@@ -213,10 +218,11 @@ Status WritePtx(const std::filesystem::path& path, const std::vector<Scan>& scan
                        path.string() + ": scan '" + scan.name + "' has an empty grid; PTX needs rows and columns");
     }
     if (!scan.list_points.empty()) {
-      return MakeError(ErrorCode::kUnsupported,
-                       path.string() + ": scan '" + scan.name + "' has " + std::to_string(scan.list_points.size()) +
-                           " points without a cell of its grid (a cloud seen from more than one place), and PTX holds a "
-                           "grid only; export it as e57, ply or las, which keep every point");
+      return MakeError(
+          ErrorCode::kUnsupported,
+          path.string() + ": scan '" + scan.name + "' has " + std::to_string(scan.list_points.size()) +
+              " points without a cell of its grid (a cloud seen from more than one place), and PTX holds a "
+              "grid only; export it as e57, ply or las, which keep every point");
     }
   }
   AtomicFile file(path);
@@ -254,7 +260,7 @@ Status WritePtx(const std::filesystem::path& path, const std::vector<Scan>& scan
         }
         const std::size_t i = scan.Index(row, c);
         if (!scan.valid[i]) {
-          chunk += "0 0 0 0.5\n";
+          chunk += scan.HasColour() ? "0 0 0 0.5 0 0 0\n" : "0 0 0 0.5\n";
           continue;
         }
         const Eigen::Vector3f& q = scan.points[i];
@@ -265,6 +271,10 @@ Status WritePtx(const std::filesystem::path& path, const std::vector<Scan>& scan
         p = AppendNumber(p, q.z());
         *p++ = ' ';
         p = AppendNumber(p, scan.reflectance[i]);
+        for (int k = 0; scan.HasColour() && k < 3; ++k) {
+          *p++ = ' ';
+          p = AppendNumber(p, static_cast<double>(scan.colour[i][k]));
+        }
         *p++ = '\n';
         chunk.append(buf, p);
       }

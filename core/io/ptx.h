@@ -5,7 +5,8 @@
 // columns with a trailing 0; row 4: "tx ty tz 1"), then rows*cols lines `x y z intensity [r g b]`,
 // column-major (all rows of column 0 first). File row i of column c is Scan row i, column c.
 // The header transform becomes Scan::world_from_scan; points stay in the scanner frame.
-// An all-zero xyz is an empty cell. Reflectance = intensity as written (PTX: 0..1).
+// An all-zero xyz is an empty cell. Reflectance = intensity as written (PTX: 0..1). A scan whose
+// first point line holds r g b (0..255) has colour.
 #pragma once
 
 #include <filesystem>
@@ -22,8 +23,8 @@ namespace scanreg::io {
 Expected<std::vector<Scan>> ReadPtx(const std::filesystem::path& path, ProgressSink& progress,
                                     const CancelToken& cancel);
 
-// Writes `x y z intensity` lines (empty cells as `0 0 0 0.5`) with the shortest text that reads
-// back to the same float. Atomic: the target is replaced only when everything was written.
+// Writes `x y z intensity` lines, `x y z intensity r g b` for a scan with colour (empty cells as
+// `0 0 0 0.5 [0 0 0]`), with the shortest text that reads back to the same float. Atomic: the target is replaced only when everything was written.
 Status WritePtx(const std::filesystem::path& path, const std::vector<Scan>& scans, ProgressSink& progress,
                 const CancelToken& cancel);
 

@@ -16,7 +16,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
-constexpr std::uint32_t kVersion = 4;  // 3: grid_from_file; 4: list points, single_viewpoint
+constexpr std::uint32_t kVersion = 5;  // 3: grid_from_file; 4: list points, single_viewpoint; 5: colour
 constexpr std::size_t kFixedHeader = 8 + 4 + 4 + 8;
 constexpr std::uint32_t kMaxScans = 1u << 20;
 // The header: the fixed part, n + 1 offsets, its checksum.
@@ -158,12 +158,18 @@ void PutRecord(std::string& out, const Scan& s) {
   Put(out, static_cast<std::uint64_t>(s.list_points.size()));
   PutBytes(out, s.list_points.data(), s.list_points.size() * sizeof(Eigen::Vector3f));
   PutBytes(out, s.list_reflectance.data(), s.list_reflectance.size() * sizeof(float));
+  Put(out, static_cast<std::uint8_t>(s.HasColour()));
+  if (s.HasColour()) {
+    PutBytes(out, s.colour.data(), s.colour.size() * sizeof(Rgb));
+    PutBytes(out, s.list_colour.data(), s.list_colour.size() * sizeof(Rgb));
+  }
   Put(out, Checksum(out.data() + begin, out.size() - begin));
 }
 
 std::size_t RecordBytes(const Scan& s) {
   return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 1 + 4 +
-         4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 1 + 8 + 16 * s.list_points.size() + 8;
+         4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 1 + 8 + 16 * s.list_points.size() + 1 +
+         (s.HasColour() ? 3 * (s.size() + s.list_points.size()) : 0) + 8;
 }
 
 // The record in bytes [begin, end).
@@ -210,6 +216,12 @@ Expected<Scan> ParseRecord(const std::string& bytes, std::size_t begin, std::siz
   s.list_reflectance.resize(listed);
   r.Bytes(s.list_points.data(), listed * sizeof(Eigen::Vector3f));
   r.Bytes(s.list_reflectance.data(), listed * sizeof(float));
+  if (r.Get<std::uint8_t>() != 0) {
+    if (!r.ok || (cells + listed) * sizeof(Rgb) > end - r.pos) return Bad("truncated or corrupt colours");
+    s.AddColour();
+    r.Bytes(s.colour.data(), cells * sizeof(Rgb));
+    r.Bytes(s.list_colour.data(), listed * sizeof(Rgb));
+  }
   if (!r.ok) return Bad("truncated");
   if (r.pos != end - 8) return Bad("trailing bytes in a scan's record");
   return s;

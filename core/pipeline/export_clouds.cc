@@ -36,14 +36,20 @@ void ApplyPose(Scan& scan) {
   scan.angles = AngularGrid{};
 }
 
-// One scan as LAS: world coordinates (double), intensity from reflectance, point source ID = the
-// scan's number in the project (from 1: LAS reserves 0), named in the file's VLR.
+// One scan as LAS: world coordinates (double), intensity from reflectance, colour when the scan has
+// one (point format 7), point source ID = the scan's number in the project (from 1: LAS reserves 0),
+// named in the file's VLR.
 Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::uint16_t source_id) {
   io::LasCloud cloud;
   scan.ForEachPoint([&](const Eigen::Vector3f& p, float refl) {
     cloud.points.push_back(scan.world_from_scan * p.cast<double>());
     cloud.reflectance.push_back(refl);
   });
+  if (scan.HasColour()) {  // in ForEachPoint's order: the grid's valid cells, then the list
+    for (std::size_t i = 0; i < scan.size(); ++i)
+      if (scan.valid[i]) cloud.rgb.push_back(scan.colour[i]);
+    cloud.rgb.insert(cloud.rgb.end(), scan.list_colour.begin(), scan.list_colour.end());
+  }
   cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
   cloud.source_names.assign(source_id + 1, "");
   cloud.source_names[source_id] = scan.name;

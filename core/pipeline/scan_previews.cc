@@ -118,6 +118,11 @@ ScanPreview MakePreview(Scan scan, std::size_t max_cells) {
       out.reflectance[to] = reflectance ? scan.reflectance[from] : 0.5f;
     }
   }
+  if (scan.HasColour()) {
+    out.colour.resize(out.size());
+    for (int r = 0; r < out.rows; ++r)
+      for (int c = 0; c < out.cols; ++c) out.colour[out.Index(r, c)] = scan.colour[scan.Index(r * s, c * s)];
+  }
   if (!scan.angles.empty()) {
     for (int c = 0; c < out.cols; ++c) out.angles.azimuth.push_back(scan.angles.azimuth[c * s]);
     for (int r = 0; r < out.rows; ++r) out.angles.elevation.push_back(scan.angles.elevation[r * s]);
@@ -126,6 +131,7 @@ ScanPreview MakePreview(Scan scan, std::size_t max_cells) {
   for (std::size_t k = 0; k < scan.list_points.size(); k += static_cast<std::size_t>(s) * s) {
     out.list_points.push_back(scan.list_points[k]);
     out.list_reflectance.push_back(scan.list_reflectance[k]);
+    if (scan.HasColour()) out.list_colour.push_back(scan.list_colour[k]);
   }
   out.single_viewpoint = scan.single_viewpoint;
   out.grid_from_file = scan.grid_from_file;

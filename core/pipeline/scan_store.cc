@@ -14,7 +14,8 @@ namespace scanreg::pipeline {
 std::size_t ScanBytes(const Scan& scan) {
   return scan.points.capacity() * sizeof(Eigen::Vector3f) + scan.reflectance.capacity() * sizeof(float) +
          scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float) +
-         scan.list_points.capacity() * sizeof(Eigen::Vector3f) + scan.list_reflectance.capacity() * sizeof(float);
+         scan.list_points.capacity() * sizeof(Eigen::Vector3f) + scan.list_reflectance.capacity() * sizeof(float) +
+         (scan.colour.capacity() + scan.list_colour.capacity()) * sizeof(Rgb);
 }
 
 std::size_t DefaultMemoryBudget() {

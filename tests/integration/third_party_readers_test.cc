@@ -21,6 +21,7 @@
 
 #include "core/io/pose_file.h"
 #include "core/io/ply.h"
+#include "core/io/scan_file.h"
 #include "core/io/text_parse.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/export_clouds.h"
@@ -393,6 +394,120 @@ TEST(ThirdPartyReaders, AnUnstructuredE57FromAnotherProgramKeepsEveryPoint) {
   ASSERT_EQ(read.size(), imported.size());
   EXPECT_LT(WorstDistance(read, imported, 0.005), 1e-4);  // 0.1 mm
   EXPECT_LT(WorstDistance(imported, read, 0.005), 1e-4);
+}
+
+// A colour for each point of the coloured scan below, from its position (so any reordering of the
+// points by a writer or reader can be followed).
+Rgb ColourAt(const Eigen::Vector3d& p) {
+  const long k = std::lround(p.x() * 1000) * 7 + std::lround(p.y() * 1000) * 13 + std::lround(p.z() * 1000) * 3;
+  return Rgb{std::uint8_t(k % 251), std::uint8_t((k / 3) % 256), std::uint8_t((k / 7) % 253)};
+}
+
+// A scan with colour, as a scanner with a camera writes it (a Leica-style PTX of `x y z i r g b`
+// lines), keeps its colour on import and in every export: PCL's PLY reader, the LAS records
+// decoded by the specification (point format 7, RGB at byte 30, 16 bits a channel) and our E57
+// and PTX readers give back each point's own colour.
+TEST(ThirdPartyReaders, AScansColourIsKeptOnImportAndInEveryExport) {
+  test::TempDir dir;
+  const int rows = 20, cols = 30;
+  std::vector<Eigen::Vector3d> points;  // scanner frame = world (identity pose)
+  const std::filesystem::path file = dir / "coloured.ptx";
+  {
+    std::FILE* f = std::fopen(file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fprintf(f, "%d\n%d\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", cols, rows);
+    for (int c = 0; c < cols; ++c) {
+      for (int r = 0; r < rows; ++r) {
+        if ((r * cols + c) % 11 == 0) {  // an empty cell
+          std::fprintf(f, "0 0 0 0.5 0 0 0\n");
+          continue;
+        }
+        const double az = -0.6 + 0.04 * c, el = 0.4 - 0.04 * r, range = 5.0 + 0.1 * ((r * 7 + c * 3) % 10);
+        const Eigen::Vector3d p(std::round(1000 * range * std::cos(el) * std::cos(az)) / 1000,
+                                std::round(1000 * range * std::cos(el) * std::sin(az)) / 1000,
+                                std::round(1000 * range * std::sin(el)) / 1000);
+        const Rgb rgb = ColourAt(p);
+        std::fprintf(f, "%.3f %.3f %.3f 0.5 %d %d %d\n", p.x(), p.y(), p.z(), rgb[0], rgb[1], rgb[2]);
+        points.push_back(p);
+      }
+    }
+    std::fclose(f);
+  }
+  NullProgress progress;
+  CancelToken cancel;
+  pipeline::CreateProjectOptions create;
+  create.scan_files = {file};
+  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
+  ASSERT_TRUE(created.ok()) << created.error().ToString();
+  io::Project project = created->project;
+  auto scans = pipeline::LoadProjectScans(project, progress, cancel);
+  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
+  ASSERT_TRUE(scans->front().HasColour());
+  std::size_t wrong = 0;
+  for (std::size_t k = 0; k < scans->front().size(); ++k)
+    if (scans->front().valid[k]) wrong += scans->front().colour[k] != ColourAt(scans->front().points[k].cast<double>());
+  EXPECT_EQ(wrong, 0u);
+
+  project.scans[0].registered = true;
+  for (const char* format : {"ply", "las", "e57", "ptx"}) {
+    SCOPED_TRACE(format);
+    pipeline::ExportCloudsOptions options;
+    options.dir = dir / format;
+    options.format = format;
+    auto exported = pipeline::ExportClouds(project, options, progress, cancel);
+    ASSERT_TRUE(exported.ok()) << exported.error().ToString();
+    const std::filesystem::path out = (*exported)[0].file;
+    std::vector<std::pair<Eigen::Vector3d, Rgb>> read;
+    if (std::string(format) == "ply") {
+      pcl::PCLPointCloud2 cloud;
+      ASSERT_EQ(pcl::io::loadPLYFile(out.string(), cloud), 0);
+      int xyz[3] = {-1, -1, -1}, rgb = -1;
+      for (const auto& f : cloud.fields) {
+        for (int d = 0; d < 3; ++d)
+          if (f.name == std::string(1, char('x' + d))) xyz[d] = f.offset;
+        if (f.name == "rgb" || f.name == "rgba") rgb = f.offset;  // PCL packs red, green, blue
+      }
+      ASSERT_GE(rgb, 0) << "PCL found no colour";
+      for (std::size_t i = 0; i < std::size_t(cloud.width) * cloud.height; ++i) {
+        Eigen::Vector3d p;
+        for (int d = 0; d < 3; ++d) std::memcpy(&p[d], cloud.data.data() + i * cloud.point_step + xyz[d], 8);
+        if (!p.allFinite()) continue;
+        std::uint32_t packed = 0;
+        std::memcpy(&packed, cloud.data.data() + i * cloud.point_step + rgb, 4);
+        read.push_back({p, Rgb{std::uint8_t(packed >> 16), std::uint8_t(packed >> 8), std::uint8_t(packed)}});
+      }
+    } else if (std::string(format) == "las") {
+      std::ifstream in(out, std::ios::binary);
+      const std::string b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      ASSERT_GT(b.size(), 375u);
+      EXPECT_EQ(static_cast<int>(static_cast<unsigned char>(b[104])), 7);  // point data format 7: RGB
+      const std::vector<Eigen::Vector3d> xyz = ReadLasBySpecification(out);
+      std::uint32_t first = 0;
+      std::uint16_t length = 0;
+      std::memcpy(&first, b.data() + 96, 4);
+      std::memcpy(&length, b.data() + 105, 2);
+      for (std::size_t k = 0; k < xyz.size(); ++k) {
+        Rgb c;
+        for (int ch = 0; ch < 3; ++ch) {
+          std::uint16_t v = 0;
+          std::memcpy(&v, b.data() + first + k * length + 30 + 2 * ch, 2);
+          c[ch] = std::uint8_t(v >> 8);
+        }
+        read.push_back({xyz[k], c});
+      }
+    } else {
+      Expected<std::vector<Scan>> back = io::ReadScanFile(out, progress, cancel);
+      ASSERT_TRUE(back.ok()) << back.error().ToString();
+      const Scan& s = back->front();
+      ASSERT_TRUE(s.HasColour());
+      for (std::size_t k = 0; k < s.size(); ++k)
+        if (s.valid[k]) read.push_back({s.world_from_scan * s.points[k].cast<double>(), s.colour[k]});
+    }
+    ASSERT_EQ(read.size(), points.size());
+    std::size_t mismatched = 0;
+    for (const auto& [p, c] : read) mismatched += c != ColourAt(p);
+    EXPECT_EQ(mismatched, 0u);
+  }
 }
 
 }  // namespace
