@@ -14,6 +14,13 @@ Scan::Scan(std::string scan_name, int num_rows, int num_cols)
       reflectance(static_cast<std::size_t>(num_rows) * num_cols, 0.0f),
       valid(static_cast<std::size_t>(num_rows) * num_cols, 0) {}
 
+Rgb ToRgb(double red, double green, double blue) {
+  const auto channel = [](double v) {
+    return static_cast<std::uint8_t>(std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 255.0) + 0.5);
+  };
+  return {channel(red), channel(green), channel(blue)};
+}
+
 void Scan::Set(int row, int col, const Eigen::Vector3f& p, float refl) {
   const std::size_t i = Index(row, col);
   points[i] = p;

@@ -27,6 +27,9 @@ struct AngularGrid {
 // A point's colour, 8 bits a channel (red, green, blue), as a scanner's camera gives it.
 using Rgb = std::array<std::uint8_t, 3>;
 
+// A colour from channels already on the 0..255 scale: rounded, clamped, and 0 where a channel is not finite.
+Rgb ToRgb(double red, double green, double blue);
+
 // 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), and 3 more with colour. Points stay local to the
 // scanner (float is plenty within a few km); the pose is double, so UTM-sized coordinates keep
 // their precision.

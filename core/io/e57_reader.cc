@@ -101,14 +101,9 @@ std::pair<double, double> ColourRange(const e57::ScanDesc& desc) {
   return {0.0, 255.0};
 }
 
-Rgb ToRgb(const Eigen::Vector3f& stored, const std::pair<double, double>& range) {
+Rgb StoredToRgb(const Eigen::Vector3f& stored, const std::pair<double, double>& range) {
   const double scale = 255.0 / (range.second - range.first);
-  Rgb out;
-  for (int c = 0; c < 3; ++c) {
-    const double v = std::isfinite(stored[c]) ? (stored[c] - range.first) * scale : 0.0;
-    out[c] = static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0) + 0.5);
-  }
-  return out;
+  return ToRgb((stored[0] - range.first) * scale, (stored[1] - range.first) * scale, (stored[2] - range.first) * scale);
 }
 
 Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& desc, std::string name,
@@ -159,11 +154,11 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
     if (scan.IsValid(r, c)) {  // the first point of a cell takes it; later returns stay as a list
       scan.list_points.push_back(records.xyz[i]);
       scan.list_reflectance.push_back(refl);
-      if (scan.HasColour()) scan.list_colour.push_back(ToRgb(records.colour[i], colour_range));
+      if (scan.HasColour()) scan.list_colour.push_back(StoredToRgb(records.colour[i], colour_range));
       continue;
     }
     scan.Set(r, c, records.xyz[i], refl);
-    if (scan.HasColour()) scan.colour[scan.Index(r, c)] = ToRgb(records.colour[i], colour_range);
+    if (scan.HasColour()) scan.colour[scan.Index(r, c)] = StoredToRgb(records.colour[i], colour_range);
   }
   EstimateAngularGrid(scan);
   return scan;
@@ -183,7 +178,7 @@ Expected<Scan> CloudScan(const e57::PointRecords& records, const e57::ScanDesc& 
     reflectance.push_back(records.intensity.empty() || scale == 0.0
                               ? 0.5f
                               : float((records.intensity[i] - intensity_range.first) * scale));
-    if (!records.colour.empty()) colour.push_back(ToRgb(records.colour[i], colour_range));
+    if (!records.colour.empty()) colour.push_back(StoredToRgb(records.colour[i], colour_range));
   }
   return OrganizeCloudByDensity(points, reflectance, std::move(name), where, colour);
 }

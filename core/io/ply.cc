@@ -173,13 +173,6 @@ double ColourScale(PlyType type) {
   return 1.0;
 }
 
-Rgb ToRgb(const double rgb[3]) {
-  Rgb out;
-  for (int c = 0; c < 3; ++c)
-    out[c] = static_cast<std::uint8_t>(std::clamp(std::isfinite(rgb[c]) ? rgb[c] : 0.0, 0.0, 255.0) + 0.5);
-  return out;
-}
-
 Expected<int> ObjInfoInt(const PlyHeader& header, const std::string& key, const std::filesystem::path& path) {
   auto it = header.obj_info.find(key);
   int v = 0;
@@ -315,7 +308,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       const Eigen::Vector3d p(v[0], v[1], v[2]);
       points[k] = (points_in_world ? scan_from_world * p : p).cast<float>();
       if (ii >= 0) intensity[k] = float(v[3]);
-      if (ic[0] >= 0) colour[k] = ToRgb(rgb);
+      if (ic[0] >= 0) colour[k] = ToRgb(rgb[0], rgb[1], rgb[2]);
     }
   }
   if (!have_vertex) return MakeError(ErrorCode::kUnsupported, path.string() + ": the PLY file has no vertex element");

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <random>
 #include <unordered_map>
 
@@ -59,6 +60,26 @@ pipeline::MergeResult Merge(const std::vector<Scan>& scans, double voxel) {
   Expected<pipeline::MergeResult> r = pipeline::MergeScans(scans, {}, options, progress, cancel);
   EXPECT_TRUE(r.ok()) << r.error().ToString();
   return r.ok() ? *r : pipeline::MergeResult{};
+}
+
+struct Imported {
+  io::Project project;
+  std::vector<Scan> scans;
+};
+
+// One file made into a project in `dir` and its scans loaded, as `scanreg-cli new` and a later command do.
+std::optional<Imported> ImportFile(const std::filesystem::path& file, const std::filesystem::path& dir) {
+  NullProgress progress;
+  CancelToken cancel;
+  pipeline::CreateProjectOptions create;
+  create.scan_files = {file};
+  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
+  EXPECT_TRUE(created.ok()) << created.error().ToString();
+  if (!created.ok()) return std::nullopt;
+  auto scans = pipeline::LoadProjectScans(created->project, progress, cancel);
+  EXPECT_TRUE(scans.ok()) << scans.error().ToString();
+  if (!scans.ok()) return std::nullopt;
+  return Imported{created->project, std::move(*scans)};
 }
 
 std::vector<Eigen::Vector3d> WorldVertices(const merge::Mesh& mesh) {
@@ -291,15 +312,12 @@ TEST(ThirdPartyReaders, AMergedCloudIsImportedAndExportedWithEveryPoint) {
     for (const Eigen::Vector3d& p : merged) std::fprintf(f, "%.5f %.5f %.5f 0.5\n", p.x(), p.y(), p.z());
     std::fclose(f);
   }
-  pipeline::CreateProjectOptions create;
-  create.scan_files = {file};
-  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
-  ASSERT_TRUE(created.ok()) << created.error().ToString();
-  io::Project project = created->project;
-  auto scans = pipeline::LoadProjectScans(project, progress, cancel);
-  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
-  ASSERT_EQ(scans->size(), 1u);
-  const Scan& scan = scans->front();
+  std::optional<Imported> in = ImportFile(file, dir.path());
+  ASSERT_TRUE(in);
+  io::Project& project = in->project;
+  const std::vector<Scan>& scans = in->scans;
+  ASSERT_EQ(scans.size(), 1u);
+  const Scan& scan = scans.front();
   std::printf("merged cloud: %zu points, %zu in the grid, %zu as a list\n", merged.size(), scan.CountValid(),
               scan.list_points.size());
   EXPECT_EQ(scan.CountPoints(), merged.size());
@@ -348,15 +366,12 @@ TEST(ThirdPartyReaders, AnUnstructuredE57FromAnotherProgramKeepsEveryPoint) {
   NullProgress progress;
   CancelToken cancel;
   const std::filesystem::path file = data / "e57_libe57format" / "bunnyDouble.e57";
-  pipeline::CreateProjectOptions create;
-  create.scan_files = {file};
-  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
-  ASSERT_TRUE(created.ok()) << created.error().ToString();
-  io::Project project = created->project;
-  auto scans = pipeline::LoadProjectScans(project, progress, cancel);
-  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
-  ASSERT_EQ(scans->size(), 1u);
-  const Scan& scan = scans->front();
+  std::optional<Imported> in = ImportFile(file, dir.path());
+  ASSERT_TRUE(in);
+  io::Project& project = in->project;
+  const std::vector<Scan>& scans = in->scans;
+  ASSERT_EQ(scans.size(), 1u);
+  const Scan& scan = scans.front();
   EXPECT_EQ(scan.CountPoints(), 30571u);  // the file's recordCount
   std::vector<Eigen::Vector3d> imported;
   scan.ForEachPoint([&](const Eigen::Vector3f& p, float) { imported.push_back(scan.world_from_scan * p.cast<double>()); });
@@ -435,17 +450,14 @@ TEST(ThirdPartyReaders, AScansColourIsKeptOnImportAndInEveryExport) {
   }
   NullProgress progress;
   CancelToken cancel;
-  pipeline::CreateProjectOptions create;
-  create.scan_files = {file};
-  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
-  ASSERT_TRUE(created.ok()) << created.error().ToString();
-  io::Project project = created->project;
-  auto scans = pipeline::LoadProjectScans(project, progress, cancel);
-  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
-  ASSERT_TRUE(scans->front().HasColour());
+  std::optional<Imported> in = ImportFile(file, dir.path());
+  ASSERT_TRUE(in);
+  io::Project& project = in->project;
+  const std::vector<Scan>& scans = in->scans;
+  ASSERT_TRUE(scans.front().HasColour());
   std::size_t wrong = 0;
-  for (std::size_t k = 0; k < scans->front().size(); ++k)
-    if (scans->front().valid[k]) wrong += scans->front().colour[k] != ColourAt(scans->front().points[k].cast<double>());
+  for (std::size_t k = 0; k < scans.front().size(); ++k)
+    if (scans.front().valid[k]) wrong += scans.front().colour[k] != ColourAt(scans.front().points[k].cast<double>());
   EXPECT_EQ(wrong, 0u);
 
   project.scans[0].registered = true;

@@ -56,7 +56,9 @@ Trust FromImportedPoses(const test::RealSet& set) {
     int farther = 0;
     for (std::size_t i = 0; i < n; ++i) {
       t.registered += r->scans[i].registered;
-      if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+      if (!r->scans[i].registered) {
+        EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+      }
       for (std::size_t j = i + 1; j < n; ++j) {
         if (!r->scans[i].registered || !r->scans[j].registered) continue;
         const PoseError before = PairError(set, start, i, j), after = PairError(set, world, i, j);
@@ -97,7 +99,9 @@ Trust FromNoPoses(const test::RealSet& set) {
   for (const ScanRegistration& s : r->scans) world.push_back(s.world_from_scan);
   for (std::size_t i = 0; i < n; ++i) {
     t.registered += r->scans[i].registered;
-    if (!r->scans[i].registered) EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+    if (!r->scans[i].registered) {
+      EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name;
+    }
     for (std::size_t j = i + 1; j < n; ++j) {
       if (!r->scans[i].registered || !r->scans[j].registered) continue;
       const PoseError e = PairError(set, world, i, j);
