@@ -1,3 +1,6 @@
+// The main window: its docks, the status bar's progress and Cancel, the registration jobs, the
+// panels' refresh and its screenshots. Its menus are in main_window_menus.cc, the project files in
+// main_window_files.cc, the user's edits in main_window_edits.cc, georeferencing in main_window_georef.cc.
 #include "ui/main_window.h"
 
 #include <QVTKOpenGLNativeWidget.h>
@@ -5,11 +8,6 @@
 #include <QApplication>
 #include <QCloseEvent>
 #include <QDockWidget>
-#include <QFileDialog>
-#include <QFileInfo>
-#include <QInputDialog>
-#include <QLineEdit>
-#include <QMenuBar>
 #include <QMessageBox>
 #include <QPainter>
 #include <QProgressBar>
@@ -18,21 +16,13 @@
 #include <QScreen>
 #include <QSettings>
 #include <QShortcut>
-#include <QStandardPaths>
 #include <QStatusBar>
-#include <QTimer>
-#include <QUndoStack>
 
 #include "core/common/log.h"
-#include "core/io/project_lock.h"
 #include "core/io/project_tree.h"
-#include "core/io/scan_file.h"
-#include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/register_settings.h"
-#include "core/report/report.h"
-#include "ui/app_settings.h"
 #include "ui/control_panel.h"
 #include "ui/job_runner.h"
 #include "ui/merge_panel.h"
@@ -48,32 +38,10 @@
 namespace scanreg::ui {
 namespace {
 
-struct LoadedProject {
-  io::Project project;
-  std::vector<pipeline::ScanPreview> previews;
-};
-
-// Scans read for the open project (Add scans): the project with them appended, and their previews.
-struct AddedScans {
-  io::Project project;
-  std::vector<pipeline::ScanPreview> previews;
-  std::vector<std::string> skipped;  // why each file left out was left out
-};
-
 struct Registered {
   io::Project project;
   Eigen::MatrixXi confusion;
 };
-
-// The project's previews, one scan in memory at a time (issue 13: the desktop keeps previews).
-// preview_cells: what all previews share.
-Expected<LoadedProject> LoadJob(io::Project project, std::size_t preview_cells, ProgressSink& progress,
-                                const CancelToken& cancel) {
-  Expected<std::vector<pipeline::ScanPreview>> previews = pipeline::LoadScanPreviews(
-      project, pipeline::PreviewCellsPerScan(project.scans.size(), preview_cells), progress, cancel);
-  if (!previews) return previews.error();
-  return LoadedProject{std::move(project), std::move(*previews)};
-}
 
 }  // namespace
 
@@ -201,224 +169,11 @@ void MainWindow::CreateDocks() {
   first_right->raise();
 }
 
-void MainWindow::CreateMenus() {
-  QMenu* file = menuBar()->addMenu(tr("&File"));
-  file->setObjectName("FileMenu");
-  // "*.ptx *.e57 *.ply *.pcd *.las" from io::SupportedScanExtensions() (".ptx, .e57, .ply, .pcd, .las").
-  const QString scan_filter =
-      tr("Scans (%1);;All files (*)").arg(QString(io::SupportedScanExtensions()).replace(".", "*.").replace(",", ""));
-  QAction* create = file->addAction(tr("&New project…"), this, [this, scan_filter] {
-    if (!MaybeSaveChanges()) return;
-    const QStringList files =
-        QFileDialog::getOpenFileNames(this, tr("New project: choose the scans"), LastDir(), scan_filter);
-    if (files.isEmpty()) return;
-    RememberDir(files.first());
-    const QString path =
-        QFileDialog::getSaveFileName(this, tr("New project: save it as"), LastDir() + "/project.scanreg.json",
-                                     tr("scanreg projects (*.scanreg.json)"));
-    if (!path.isEmpty()) NewProject(files, path);
-  });
-  create->setShortcut(QKeySequence::New);
-  QAction* open = file->addAction(tr("&Open project…"), this, [this] {
-    if (!MaybeSaveChanges()) return;
-    const QString path = QFileDialog::getOpenFileName(this, tr("Open project"), LastDir(),
-                                                      tr("scanreg projects (*.scanreg.json);;All files (*)"));
-    if (path.isEmpty()) return;
-    RememberDir(path);
-    OpenProject(path);
-  });
-  open->setShortcut(QKeySequence::Open);
-  QMenu* recent = file->addMenu(tr("Open &recent"));
-  recent->setObjectName("RecentMenu");
-  connect(recent, &QMenu::aboutToShow, this, [this, recent] { FillRecentMenu(recent); });
-  file->addAction(tr("Open &demo project"), this, [this] {
-    if (!MaybeSaveChanges()) return;
-    const QString dir = QStandardPaths::writableLocation(QStandardPaths::TempLocation) + "/scanreg-demo";
-    OpenDemoProject(dir);
-  });
-  QAction* add = file->addAction(tr("&Add scans…"), this, [this, scan_filter] {
-    const QStringList files = QFileDialog::getOpenFileNames(this, tr("Add scans"), LastDir(), scan_filter);
-    if (files.isEmpty()) return;
-    RememberDir(files.first());
-    AddScans(files);
-  });
-  QAction* control = file->addAction(tr("Import &control points…"), this, [this] {
-    const QString path = QFileDialog::getOpenFileName(this, tr("Import control points"), LastDir(),
-                                                      tr("Control points (*.csv *.txt);;All files (*)"));
-    if (path.isEmpty()) return;
-    RememberDir(path);
-    ImportControl(path);
-  });
-  control->setObjectName("ImportControlAction");
-  QAction* save = file->addAction(tr("&Save project"), this, [this] {
-    if (project().file.empty()) {
-      SaveProjectAs();
-    } else {
-      SaveProject(QString::fromStdString(project().file.string()));
-    }
-  });
-  save->setShortcut(QKeySequence::Save);
-  QAction* save_as = file->addAction(tr("Save project &as…"), this, &MainWindow::SaveProjectAs);
-  QAction* report = file->addAction(tr("Export &report…"), this, [this] {
-    const QString dir = QFileDialog::getExistingDirectory(this, tr("Export report into folder"), LastDir());
-    if (dir.isEmpty()) return;
-    RememberDir(dir);
-    ExportReport(dir);
-  });
-  file->addSeparator();
-  QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
-  quit->setShortcut(QKeySequence::Quit);
-
-  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
-  QAction* undo = doc_->undoStack()->createUndoAction(this, tr("&Undo"));
-  undo->setShortcut(QKeySequence::Undo);
-  QAction* redo = doc_->undoStack()->createRedoAction(this, tr("&Redo"));
-  redo->setShortcut(QKeySequence::Redo);
-  edit->addAction(undo);
-  edit->addAction(redo);
-  edit->addSeparator();
-  // On the scan selected in the scan list (also its context menu).
-  auto with_scan = [this](const QString& what, std::function<void(const QString&)> act) {
-    return [this, what, act] {
-      if (SelectedScan().isEmpty()) {
-        ShowError(what, tr("Select a scan in the scan list first."));
-        return;
-      }
-      act(SelectedScan());
-    };
-  };
-  QAction* rename = edit->addAction(tr("Re&name scan…"), this, with_scan(tr("Rename scan"), [this](const QString& s) {
-    bool ok = false;
-    const QString name = QInputDialog::getText(this, tr("Rename scan"), tr("New name of %1:").arg(s), QLineEdit::Normal, s, &ok);
-    if (ok && name != s) RenameScan(s, name);
-  }));
-  QAction* remove = edit->addAction(tr("Re&move scan"), this,
-                                    with_scan(tr("Remove scan"), [this](const QString& s) { RemoveScan(s); }));
-  QAction* relink = edit->addAction(tr("Re&link scan file…"), this, with_scan(tr("Relink scan file"), [this, scan_filter](const QString& s) {
-    const QString file = QFileDialog::getOpenFileName(this, tr("The file of %1").arg(s), LastDir(), scan_filter);
-    if (!file.isEmpty()) RelinkScan(s, file);
-  }));
-  QAction* root = edit->addAction(tr("Set as r&oot of the scan order"), this,
-                                  with_scan(tr("Set root"), [this](const QString& s) { SetRoot(s); }));
-  scan_list_->setContextMenuPolicy(Qt::ActionsContextMenu);
-  for (QAction* a : {rename, remove, relink, root}) scan_list_->addAction(a);
-
-  QMenu* reg = menuBar()->addMenu(tr("&Registration"));
-  QAction* run = reg->addAction(tr("&Register all scans"), this, [this] { RegisterProject(); });
-  run->setShortcut(Qt::CTRL | Qt::Key_R);
-  QAction* only_new = reg->addAction(tr("Register &unregistered scans"), this, [this] { RegisterUnregistered(); });
-  QAction* refine_all =
-      reg->addAction(tr("Refine all from &current poses"), this, [this] { RefineFromCurrentPoses(); });
-  reg->addSeparator();
-  QAction* pick = reg->addAction(tr("Align scan by &picked points…"), this,
-                                 with_scan(tr("Align by picked points"), [this](const QString& s) { PickPoints(s); }));
-  QAction* refine = reg->addAction(tr("Re&fine scan from its pose"), this,
-                                   with_scan(tr("Refine scan"), [this](const QString& s) { RefineScan(s); }));
-  QAction* edit_pose = reg->addAction(tr("Edit scan &pose…"), this, [this] { EditSelectedScanPose(); });
-  QAction* release = reg->addAction(tr("Re&lease hand placement"), this,
-                                    with_scan(tr("Release hand placement"),
-                                              [this](const QString& s) { ReleaseHandPlacement(s); }));
-  reg->addSeparator();
-  QAction* pick_target = reg->addAction(tr("Pick a &target in scan…"), this,
-                                        with_scan(tr("Pick a target"), [this](const QString& s) { PickTarget(s); }));
-  pick_target->setObjectName("PickTargetAction");
-  QAction* georef = reg->addAction(tr("&Georeference on control"), this, [this] { Georeference(); });
-  georef->setObjectName("GeoreferenceAction");
-  reg->addSeparator();
-  QAction* settings = reg->addAction(tr("&Settings…"), this, [this] { EditRegisterSettings(); });
-  for (QAction* a : {pick, refine, edit_pose, release, pick_target}) scan_list_->addAction(a);
-  project_actions_ = {save,   save_as, run,  add,    report,    only_new, refine_all, pick,      refine,
-                      rename, remove,  relink, root, edit_pose, release,  pick_target, georef, settings};
-
-  QMenu* view = menuBar()->addMenu(tr("&View"));
-  view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
-  QAction* refl = view->addAction(tr("Colour by &reflectance"));
-  refl->setObjectName("ColourByReflectance");
-  refl->setCheckable(true);
-  refl->setChecked(scene_->colouring() == CloudColouring::kReflectance);
-  connect(refl, &QAction::toggled, this, [this](bool on) {
-    scene_->SetColouring(on ? CloudColouring::kReflectance : CloudColouring::kPerScan);
-    QSettings().setValue("view/colour_by_reflectance", on);
-  });
-  QAction* full = view->addAction(tr("&Full resolution"));
-  full->setObjectName("FullResolution");
-  full->setCheckable(true);
-  full->setToolTip(tr("Draw every point (a subset while the camera moves); otherwise at most %L1 points in all.")
-                       .arg(ScanScene::kDecimatedPoints));
-  connect(full, &QAction::toggled, scene_, &ScanScene::SetFullResolution);
-
-  QMenu* help = menuBar()->addMenu(tr("&Help"));
-  help->addAction(tr("&About scanreg"), this, &MainWindow::ShowAbout);
-}
-
 void MainWindow::SetBusy(bool busy) {
   progress_->setVisible(busy);
   cancel_->setVisible(busy);
   if (busy) progress_->setValue(0);
   for (QAction* a : project_actions_) a->setEnabled(!busy && !project().scans.empty());
-}
-
-bool MainWindow::OpenProject(const QString& path, const QString& scan_folder) {
-  Expected<io::Project> project = io::LoadProject(path.toStdString());
-  if (!project) {
-    ShowError(tr("Cannot open project"), QString::fromStdString(project.error().message));
-    return false;
-  }
-  // Scan files that moved: looked for in scan_folder, or the user is asked for a folder.
-  const bool relinked = !scan_folder.isEmpty() && pipeline::RelinkFromFolder(*project, scan_folder.toStdString()) > 0;
-  const std::vector<std::string> missing = pipeline::MissingScanFiles(*project);
-  if (!missing.empty()) {
-    QStringList lines;
-    for (const std::string& name : missing)
-      lines << QString::fromStdString(name + ": " + project->scans[project->FindScan(name)].path.string());
-    auto* box = new QMessageBox(QMessageBox::Warning, tr("Scan files missing"),
-                                tr("%n scan file(s) of %1 are not where the project says:\n\n%2\n\nLocate the folder "
-                                   "that holds them (the project is relinked to it; save to keep the new paths).",
-                                   "", int(missing.size()))
-                                    .arg(path, lines.join("\n")),
-                                QMessageBox::Cancel, this);
-    box->setObjectName("MissingFilesDialog");
-    box->setAttribute(Qt::WA_DeleteOnClose);
-    QPushButton* locate = box->addButton(tr("Locate folder…"), QMessageBox::AcceptRole);
-    connect(locate, &QPushButton::clicked, this, [this, path] {
-      const QString dir = QFileDialog::getExistingDirectory(this, tr("Folder with the missing scan files"), LastDir());
-      if (!dir.isEmpty()) QTimer::singleShot(0, this, [this, path, dir] { OpenProject(path, dir); });
-    });
-    LogWarning(QString("%1: %2 scan file(s) missing").arg(path).arg(missing.size()).toStdString());
-    box->open();
-    return false;
-  }
-  return jobs_->Start<LoadedProject>(
-      tr("Loading %1").arg(path),
-      [p = std::move(*project), cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) {
-        return LoadJob(p, cells, progress, cancel);
-      },
-      [this, relinked](LoadedProject& loaded) {
-        OnProjectLoaded(std::move(loaded.project), std::move(loaded.previews));
-        if (relinked) doc_->MarkChanged();  // the new paths are not saved yet
-      });
-}
-
-void MainWindow::OnProjectLoaded(io::Project project, std::vector<pipeline::ScanPreview> previews) {
-  doc_->Open(std::move(project), std::move(previews));
-  if (!this->project().file.empty()) AddRecentProject(QString::fromStdString(this->project().file.string()));
-}
-
-bool MainWindow::OpenDemoProject(const QString& dir) {
-  return jobs_->Start<LoadedProject>(
-      tr("Simulating the demo project"),
-      [dir, cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) -> Expected<LoadedProject> {
-    SimulatedProjectOptions options;
-    options.stations = 5;
-    options.scanner.cols = 1500;
-    options.scanner.rows = 375;
-    SubProgress sim(progress, 0.0, 0.7);
-    Expected<io::Project> project = pipeline::WriteSimulatedProject(options, dir.toStdString(), sim, cancel);
-    if (!project) return project.error();
-    SubProgress load(progress, 0.7, 1.0);
-    return LoadJob(std::move(*project), cells, load, cancel);
-      },
-      [this](LoadedProject& loaded) { OnProjectLoaded(std::move(loaded.project), std::move(loaded.previews)); });
 }
 
 bool MainWindow::RegisterProject() { return StartRegistration(tr("register the scans"), RegistrationOptions(), true); }
@@ -439,37 +194,6 @@ bool MainWindow::StartRegistration(const QString& text, pipeline::RegisterOption
         doc_->ApplyRegistration(text, std::move(r.project), r.confusion);
         ReportRegistration();
       });
-}
-
-void MainWindow::SaveProjectAs() {
-  QString path = QFileDialog::getSaveFileName(this, tr("Save project as"), LastDir(),
-                                              tr("scanreg projects (*.scanreg.json)"));
-  if (path.isEmpty()) return;
-  // Open lists *.scanreg.json: a project saved under another name would be hidden from it.
-  if (!path.endsWith(".scanreg.json")) path += path.endsWith(".json") ? QString() : QStringLiteral(".scanreg.json");
-  RememberDir(path);
-  SaveProject(path);
-}
-
-bool MainWindow::SaveProject(const QString& path) {
-  // One writer per project (issue 16): a `scanreg-cli register` running on it holds its lock.
-  Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(path.toStdString(), "scanreg (saving from the GUI)");
-  if (!lock) {
-    ShowError(tr("Cannot save project"), QString::fromStdString(lock.error().message));
-    return false;
-  }
-  std::uint64_t digest = 0;
-  if (Status s = io::SaveProject(project(), path.toStdString(), &digest); !s) {
-    if (s.error().code == ErrorCode::kConflict) {
-      OfferReload(path, QString::fromStdString(s.error().message));
-    } else {
-      ShowError(tr("Cannot save project"), QString::fromStdString(s.error().message));
-    }
-    return false;
-  }
-  doc_->MarkSaved(std::filesystem::absolute(path.toStdString()), digest);
-  statusBar()->showMessage(tr("Saved %1").arg(path), 5000);
-  return true;
 }
 
 pipeline::RegisterOptions MainWindow::RegistrationOptions() const {
@@ -560,142 +284,12 @@ void MainWindow::UpdateTitle() {
   setWindowModified(doc_->dirty());
 }
 
-void MainWindow::OfferReload(const QString& path, const QString& message) {
-  LogWarning(message.toStdString());
-  auto* box = new QMessageBox(QMessageBox::Warning, tr("The project changed on disk"),
-                              message + tr("\n\nReload it (your unsaved changes are lost), save your version under "
-                                           "another name, or cancel and decide later."),
-                              QMessageBox::NoButton, this);
-  box->setAttribute(Qt::WA_DeleteOnClose);
-  box->setObjectName("ConflictDialog");
-  QPushButton* reload = box->addButton(tr("Reload from disk"), QMessageBox::DestructiveRole);
-  reload->setObjectName("ReloadButton");
-  QPushButton* save_as = box->addButton(tr("Save as…"), QMessageBox::AcceptRole);
-  save_as->setObjectName("SaveAsButton");
-  box->addButton(QMessageBox::Cancel);
-  connect(box, &QMessageBox::buttonClicked, this, [this, box, reload, save_as, path](QAbstractButton* clicked) {
-    if (clicked == reload) {
-      OpenProject(path);  // the user chose to drop the unsaved changes
-    } else if (clicked == save_as) {
-      QTimer::singleShot(0, this, &MainWindow::SaveProjectAs);
-    }
-  });
-  box->open();
-}
-
 void MainWindow::ShowError(const QString& title, const QString& message) {
   LogError(title.toStdString() + ": " + message.toStdString());
   auto* box = new QMessageBox(QMessageBox::Warning, title, message, QMessageBox::Ok, this);
   box->setAttribute(Qt::WA_DeleteOnClose);
   box->setObjectName("ErrorDialog");
   box->open();  // window-modal, does not block the event loop
-}
-
-bool MainWindow::MaybeSaveChanges() {
-  if (!dirty()) return true;
-  QMessageBox box(QMessageBox::Question, tr("Unsaved changes"),
-                  tr("The changes to %1 have not been saved. Save them first?")
-                      .arg(QString::fromStdString(project().file.filename().string())),
-                  QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, this);
-  box.setObjectName("UnsavedChangesDialog");
-  const int answer = box.exec();
-  if (answer == QMessageBox::Cancel) return false;
-  if (answer == QMessageBox::Discard) return true;
-  if (project().file.empty()) {
-    SaveProjectAs();
-    return !dirty();
-  }
-  return SaveProject(QString::fromStdString(project().file.string()));
-}
-
-void MainWindow::FillRecentMenu(QMenu* menu) {
-  const QStringList missing = RemoveMissingRecentProjects();
-  if (!missing.isEmpty()) {
-    statusBar()->showMessage(
-        tr("Removed from the recent projects (the files no longer exist): %1").arg(missing.join(", ")), 10000);
-    LogWarning("removed from the recent projects, the files no longer exist: " + missing.join(", ").toStdString());
-  }
-  menu->clear();
-  for (const QString& path : RecentProjects()) {
-    menu->addAction(QFileInfo(path).fileName() + "  —  " + QFileInfo(path).absolutePath(), this, [this, path] {
-      if (MaybeSaveChanges()) OpenProject(path);
-    });
-  }
-  if (menu->isEmpty()) menu->addAction(tr("(no recent projects)"))->setEnabled(false);
-}
-
-bool MainWindow::NewProject(const QStringList& scan_files, const QString& project_path) {
-  std::vector<std::filesystem::path> files;
-  for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start<AddedScans>(
-      tr("Creating %1").arg(project_path),
-      [files, path = project_path.toStdString(), cells = doc_->previewCells()](ProgressSink& progress,
-                                                  const CancelToken& cancel) -> Expected<AddedScans> {
-        pipeline::CreateProjectOptions options;
-        options.scan_files = files;
-        options.skip_unreadable = true;  // one bad file does not stop the others
-        SubProgress create(progress, 0.0, 0.8);
-        Expected<pipeline::CreatedProject> created = pipeline::CreateProject(path, options, create, cancel);
-        if (!created) return created.error();
-        SubProgress previews(progress, 0.8, 1.0);  // read back from the scan cache the creation filled
-        Expected<LoadedProject> loaded = LoadJob(std::move(created->project), cells, previews, cancel);
-        if (!loaded) return loaded.error();
-        return AddedScans{std::move(loaded->project), std::move(loaded->previews), std::move(created->skipped)};
-      },
-      [this](AddedScans& created) {
-        OnProjectLoaded(std::move(created.project), std::move(created.previews));
-        ShowSkippedFiles(created.skipped);
-      });
-}
-
-bool MainWindow::AddScans(const QStringList& scan_files) {
-  if (project().file.empty()) {
-    ShowError(tr("No project open"), tr("Create a project first (File → New project…), then add scans to it."));
-    return false;
-  }
-  std::vector<std::filesystem::path> files;
-  for (const QString& f : scan_files) files.push_back(f.toStdString());
-  return jobs_->Start<AddedScans>(
-      tr("Adding scans"),
-      [files, project = project(), cells = doc_->previewCells()](ProgressSink& progress, const CancelToken& cancel) mutable -> Expected<AddedScans> {
-        std::vector<std::string> skipped;
-        const std::size_t before = project.scans.size();
-        SubProgress append(progress, 0.0, 0.8);
-        if (Status s = pipeline::AppendScanFiles(project, files, append, cancel, &skipped); !s) return s.error();
-        std::vector<int> added;
-        for (std::size_t i = before; i < project.scans.size(); ++i) added.push_back(static_cast<int>(i));
-        std::vector<pipeline::ScanPreview> previews;
-        if (!added.empty()) {
-          SubProgress load(progress, 0.8, 1.0);  // read back from the scan cache the append filled
-          Expected<std::vector<pipeline::ScanPreview>> p = pipeline::LoadScanPreviews(
-              project, pipeline::PreviewCellsPerScan(project.scans.size(), cells), load, cancel, added);
-          if (!p) return p.error();
-          previews = std::move(*p);
-        }
-        return AddedScans{std::move(project), std::move(previews), std::move(skipped)};
-      },
-      [this](AddedScans& added) {
-        if (!added.previews.empty()) doc_->AppendScans(std::move(added.project), std::move(added.previews));
-        ShowSkippedFiles(added.skipped);
-      });
-}
-
-void MainWindow::ShowSkippedFiles(const std::vector<std::string>& skipped) {
-  if (skipped.empty()) return;
-  QString list;
-  for (const std::string& why : skipped) list += "• " + QString::fromStdString(why) + "\n";
-  ShowError(tr("%n file(s) not added", "", int(skipped.size())),
-            tr("The other files were added. These were left out:\n\n%1").arg(list));
-}
-
-bool MainWindow::ExportReport(const QString& dir) {
-  if (project().scans.empty()) return false;
-  return jobs_->Start<std::filesystem::path>(
-      tr("Writing the report to %1").arg(dir),
-      [project = project(), dir = dir.toStdString()](ProgressSink& progress, const CancelToken& cancel) {
-        return report::WriteReport(project, dir, progress, cancel);
-      },
-      [](std::filesystem::path& index) { LogInfo("report written: " + index.string()); });
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
@@ -718,12 +312,6 @@ void MainWindow::closeEvent(QCloseEvent* event) {
   settings.setValue("window/geometry", saveGeometry());
   settings.setValue("window/state", saveState());
   event->accept();
-}
-
-void MainWindow::ShowAbout() {
-  QMessageBox::about(
-      this, tr("About scanreg"),
-      tr("<b>scanreg</b> %1<br>Registration of terrestrial laser scans.").arg(QApplication::applicationVersion()));
 }
 
 QWidget* MainWindow::Scrollable(QWidget* content) {

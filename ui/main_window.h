@@ -165,6 +165,7 @@ class MainWindow : public QMainWindow {
 
  private:
   void CreateMenus();
+  void CreateViewMenu();  // camera, colouring, resolution
   void CreateDocks();
   void OnProjectLoaded(io::Project project, std::vector<pipeline::ScanPreview> previews);  // opened, created or simulated
   void UpdateTitle();
