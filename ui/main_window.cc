@@ -66,8 +66,6 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   view3d_->setObjectName("View3d");
   setCentralWidget(view3d_);
   scene_ = new ScanScene(view3d_, this);
-  scene_->SetColouring(QSettings().value("view/colour_by_reflectance").toBool() ? CloudColouring::kReflectance
-                                                                                : CloudColouring::kPerScan);
   CreateDocks();
   CreateMenus();
 

@@ -2,6 +2,7 @@
 // and Help. The actions call the window's public operations; those on the project are enabled only
 // with a project and no running job.
 #include <QAction>
+#include <QActionGroup>
 #include <QApplication>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -164,14 +165,49 @@ void MainWindow::CreateMenus() {
 void MainWindow::CreateViewMenu() {
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera"), view3d_, &View3d::ResetCamera);
-  QAction* refl = view->addAction(tr("Colour by &reflectance"));
-  refl->setObjectName("ColourByReflectance");
-  refl->setCheckable(true);
-  refl->setChecked(scene_->colouring() == CloudColouring::kReflectance);
-  connect(refl, &QAction::toggled, this, [this](bool on) {
-    scene_->SetColouring(on ? CloudColouring::kReflectance : CloudColouring::kPerScan);
-    QSettings().setValue("view/colour_by_reflectance", on);
-  });
+  // How the points are coloured: one exclusive choice, kept in the settings.
+  QMenu* colour = view->addMenu(tr("&Colour points by"));
+  auto* colourings = new QActionGroup(this);
+  const struct {
+    CloudColouring colouring;
+    QString text, name, setting, tip;
+  } choices[] = {
+      {CloudColouring::kPerScan, tr("&Scan"), "ColourPerScan", "scan", tr("One colour per scan, as its marker")},
+      {CloudColouring::kReflectance, tr("&Reflectance"), "ColourByReflectance", "reflectance",
+       tr("Grey by each point's reflectance (intensity)")},
+      {CloudColouring::kScannerColour, tr("Scanner &colour (RGB)"), "ColourByScannerColour", "colour",
+       tr("Each point's colour from the scanner's camera; a scan without colour is drawn grey by reflectance")},
+  };
+  QSettings settings;
+  // "view/colour_by_reflectance": the setting of versions before the scanner's colour was drawn.
+  const QString saved = settings.value("view/colouring", settings.value("view/colour_by_reflectance").toBool()
+                                                             ? QStringLiteral("reflectance")
+                                                             : QStringLiteral("scan"))
+                            .toString();
+  for (const auto& choice : choices) {
+    QAction* a = colour->addAction(choice.text);
+    a->setObjectName(choice.name);
+    a->setToolTip(choice.tip);
+    a->setStatusTip(choice.tip);
+    a->setCheckable(true);
+    colourings->addAction(a);
+    if (choice.setting == saved) {
+      a->setChecked(true);
+      scene_->SetColouring(choice.colouring);
+    }
+    connect(a, &QAction::toggled, this, [this, c = choice.colouring, setting = choice.setting](bool on) {
+      if (!on) return;
+      scene_->SetColouring(c);
+      QSettings().setValue("view/colouring", setting);
+      if (c != CloudColouring::kScannerColour || previews().empty()) return;
+      int coloured = 0;
+      for (const pipeline::ScanPreview& p : previews()) coloured += p.scan.HasColour();
+      if (coloured < static_cast<int>(previews().size()))
+        statusBar()->showMessage(tr("%1 of %n scan(s) have the scanner's colour; the others are drawn grey by "
+                                    "reflectance", "", int(previews().size())).arg(coloured), 10000);
+    });
+  }
+  if (!colourings->checkedAction()) colourings->actions().front()->setChecked(true);
   QAction* full = view->addAction(tr("&Full resolution"));
   full->setObjectName("FullResolution");
   full->setCheckable(true);

@@ -65,6 +65,8 @@ vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen
   float* p = xyz->WritePointer(0, static_cast<vtkIdType>(3 * n));
   unsigned char* c = colours->WritePointer(0, static_cast<vtkIdType>(3 * n));
   const Eigen::Isometry3d shifted = Eigen::Translation3d(-origin) * pose;
+  const bool by_colour = colouring == CloudColouring::kScannerColour && scan.HasColour();
+  const bool by_scan = colouring == CloudColouring::kPerScan;
   for (std::size_t out = 0; out < n; ++out) {
     const std::size_t i = cells[out];
     const bool on_grid = i < scan.size();
@@ -72,10 +74,14 @@ vtkSmartPointer<vtkPolyDataMapper> MakeCloudMapper(const Scan& scan, const Eigen
     const float reflectance = on_grid ? scan.reflectance[i] : scan.list_reflectance[i - scan.size()];
     const Eigen::Vector3d q = shifted * point.cast<double>();
     for (int d = 0; d < 3; ++d) p[3 * out + d] = static_cast<float>(q[d]);
-    for (int d = 0; d < 3; ++d) {
-      c[3 * out + d] = colouring == CloudColouring::kReflectance
-                           ? static_cast<unsigned char>(std::clamp(reflectance, 0.0f, 1.0f) * 255)
-                           : static_cast<unsigned char>(rgb[d] * 255);
+    if (by_colour) {
+      const Rgb& own = on_grid ? scan.colour[i] : scan.list_colour[i - scan.size()];
+      for (int d = 0; d < 3; ++d) c[3 * out + d] = own[d];
+    } else {
+      for (int d = 0; d < 3; ++d) {
+        c[3 * out + d] = by_scan ? static_cast<unsigned char>(rgb[d] * 255)
+                                 : static_cast<unsigned char>(std::clamp(reflectance, 0.0f, 1.0f) * 255);
+      }
     }
   }
   auto points = vtkSmartPointer<vtkPoints>::New();

@@ -1,5 +1,5 @@
 // Converts registered scans into VTK actors for the 3D view: one point cloud per scan, coloured
-// per scan or by reflectance, the scanner positions, the links of the scan tree and the targets.
+// per scan, by reflectance or by the scanner's colour, the scanner positions, the links of the scan tree and the targets.
 // Level of detail: a cloud is decimated to at most `max_points_per_scan` points (0 = every valid
 // point); full-resolution clouds are level-of-detail actors that draw a subset while the camera
 // moves, so a project of millions of points stays interactive.
@@ -19,7 +19,9 @@ class vtkActor;
 
 namespace scanreg::ui {
 
-enum class CloudColouring { kPerScan, kReflectance };
+// kScannerColour: each point's colour from the scanner's camera (Scan::colour); a scan without colour
+// is drawn by reflectance, as grey.
+enum class CloudColouring { kPerScan, kReflectance, kScannerColour };
 
 struct ScanActors {
   std::vector<vtkSmartPointer<vtkActor>> clouds;       // per project scan; null when the scan is not drawn

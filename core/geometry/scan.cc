@@ -67,11 +67,9 @@ Status Scan::Validate() const {
                           angles.elevation.size() != static_cast<std::size_t>(rows))) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': angular grid does not match its size");
   }
-  if (!colour.empty() && (colour.size() != n || list_colour.size() != list_points.size())) {
+  // With colour, every cell and every listed point has one.
+  if (HasColour() && (colour.size() != n || list_colour.size() != list_points.size())) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its colours and points differ in number");
-  }
-  if (colour.empty() && !list_colour.empty()) {
-    return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its listed points have colours, its grid none");
   }
   if (list_reflectance.size() != list_points.size()) {
     return MakeError(ErrorCode::kInvalidArgument,

@@ -71,7 +71,7 @@ struct Scan {
   void Set(int row, int col, const Eigen::Vector3f& p, float refl);
   void Clear(int row, int col);
 
-  bool HasColour() const { return !colour.empty(); }
+  bool HasColour() const { return !colour.empty() || !list_colour.empty(); }
   // Gives the scan colour: every cell and listed point black until set.
   void AddColour();
 

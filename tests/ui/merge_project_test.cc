@@ -22,10 +22,14 @@
 #include <QSignalSpy>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
+#include <QStatusBar>
+#include <QTextStream>
 #include <QTimer>
 #include <QtTest/QtTest>
 
+#include <array>
 #include <cmath>
+#include <set>
 
 #include "core/io/project.h"
 #include "core/pipeline/create_project.h"
@@ -36,6 +40,7 @@
 #include "ui/merge_panel.h"
 #include "ui/project_document.h"
 #include "ui/project_panels.h"
+#include "ui/scan_cloud_actors.h"
 #include "ui/scan_scene.h"
 #include "ui/screenshot_tour.h"
 
@@ -456,6 +461,94 @@ class MergeProjectTest : public QObject {
     QCOMPARE(window.scanList()->item(rows[0], 0)->checkState(), Qt::Unchecked);
     window.scanList()->item(rows[0], 0)->setCheckState(Qt::Checked);
     QVERIFY(window.scene()->CloudActor(a)->GetVisibility());
+  }
+
+  // View → Colour points by → Scanner colour draws each point in the colour its file gives it (a
+  // Leica-style PTX of "x y z i r g b" lines); a scan without colour is drawn grey by its
+  // reflectance, and the status bar says how many scans have colour. The choice is remembered.
+  void ScannerColourIsDrawnAndScansWithoutColourAreGrey() {
+    QTemporaryDir dir;
+    // A colour from the point's position, so that every drawn point can be checked on its own.
+    const auto colour_at = [](double x, double y, double z) {
+      const long k = std::lround(x * 1000) * 7 + std::lround(y * 1000) * 13 + std::lround(z * 1000) * 3;
+      return std::array<int, 3>{int(k % 251), int((k / 3) % 256), int((k / 7) % 253)};
+    };
+    const auto write_ptx = [&](const QString& name, bool coloured, double x0) {
+      QFile f(dir.filePath(name));
+      if (!f.open(QIODevice::WriteOnly)) return QString();
+      QTextStream out(&f);
+      out << "30\n20\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";  // identity pose
+      for (int c = 0; c < 30; ++c) {
+        for (int r = 0; r < 20; ++r) {
+          const double az = (c - 15) * 0.02, el = (r - 10) * 0.02, range = 4.0 + 0.05 * ((r * 7 + c * 3) % 11);
+          const double x = x0 + range * std::cos(el) * std::cos(az), y = range * std::cos(el) * std::sin(az),
+                       z = range * std::sin(el);
+          out << QString::asprintf("%.3f %.3f %.3f %.3f", x, y, z, 0.1 + 0.8 * ((r + c) % 10) / 9.0);
+          if (coloured) {
+            const auto rgb = colour_at(std::round(x * 1000) / 1000, std::round(y * 1000) / 1000,
+                                       std::round(z * 1000) / 1000);
+            out << QString::asprintf(" %d %d %d", rgb[0], rgb[1], rgb[2]);
+          }
+          out << "\n";
+        }
+      }
+      return f.fileName();
+    };
+    const QString coloured = write_ptx("camera.ptx", true, 0.0), grey = write_ptx("plain.ptx", false, 0.5);
+    QVERIFY(!coloured.isEmpty() && !grey.isEmpty());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.NewProject({coloured, grey}, dir.filePath("c.scanreg.json")));
+    QVERIFY(WaitForJob(window, 120000));
+    QCOMPARE(static_cast<int>(window.project().scans.size()), 2);
+    QVERIFY(window.previews()[0].scan.HasColour());
+    QVERIFY(!window.previews()[1].scan.HasColour());
+    window.findChild<QAction*>("ColourPerScan")->setChecked(true);
+    window.findChild<QAction*>("ColourByScannerColour")->setChecked(true);
+    QVERIFY2(window.statusBar()->currentMessage().contains("1 of 2"), qPrintable(window.statusBar()->currentMessage()));
+    QCOMPARE(QSettings().value("view/colouring").toString(), QString("colour"));
+    const auto drawn = [&](const QString& scan) {
+      std::vector<std::pair<Eigen::Vector3d, std::array<int, 3>>> points;
+      vtkActor* actor = window.scene()->CloudActor(scan);
+      if (!actor) return points;
+      vtkPolyData* poly = vtkPolyDataMapper::SafeDownCast(actor->GetMapper())->GetInput();
+      vtkDataArray* scalars = poly->GetPointData()->GetScalars();
+      for (vtkIdType i = 0; i < poly->GetNumberOfPoints(); ++i) {
+        double p[3];
+        poly->GetPoint(i, p);
+        points.push_back({Eigen::Vector3d(p[0], p[1], p[2]),
+                          {int(scalars->GetComponent(i, 0)), int(scalars->GetComponent(i, 1)), int(scalars->GetComponent(i, 2))}});
+      }
+      return points;
+    };
+    // Both scans stand at the origin, which is the scene's origin too: drawn points are world points.
+    const auto camera = drawn("camera"), plain = drawn("plain");
+    QCOMPARE(camera.size(), window.previews()[0].scan.CountPoints());
+    QCOMPARE(plain.size(), window.previews()[1].scan.CountPoints());
+    int wrong = 0, coloured_points = 0;
+    for (const auto& [p, rgb] : camera) {
+      const auto want = colour_at(std::round(p.x() * 1000) / 1000, std::round(p.y() * 1000) / 1000,
+                                  std::round(p.z() * 1000) / 1000);
+      wrong += rgb != want;
+      coloured_points += rgb[0] != rgb[1] || rgb[1] != rgb[2];
+    }
+    QCOMPARE(wrong, 0);
+    QVERIFY(coloured_points > int(camera.size()) / 2);  // not drawn grey
+    for (const auto& [p, rgb] : plain) QVERIFY(rgb[0] == rgb[1] && rgb[1] == rgb[2]);
+    std::set<std::array<int, 3>> greys;
+    for (const auto& [p, rgb] : plain) greys.insert(rgb);
+    QVERIFY(greys.size() >= 5);  // reflectance, not one flat colour
+
+    // Back to one colour per scan; the next window starts with the choice last made.
+    window.findChild<QAction*>("ColourPerScan")->setChecked(true);
+    std::set<std::array<int, 3>> per_scan;
+    for (const auto& [p, rgb] : drawn("camera")) per_scan.insert(rgb);
+    QCOMPARE(static_cast<int>(per_scan.size()), 1);
+    window.findChild<QAction*>("ColourByScannerColour")->setChecked(true);
+    MainWindow next;
+    QVERIFY(next.findChild<QAction*>("ColourByScannerColour")->isChecked());
+    QVERIFY(next.scene()->colouring() == scanreg::ui::CloudColouring::kScannerColour);
+    next.findChild<QAction*>("ColourPerScan")->setChecked(true);  // the other tests start per scan
   }
 
   void DecimatedByDefaultFullResolutionOnDemand() {
