@@ -16,12 +16,16 @@ int RunMerge(const std::vector<std::string>& argv) {
   int code = 0;
   auto args = ParseOrHelp(
       "merge", "PROJECT.scanreg.json --out MESH.ply|.obj|.stl [options]   merges the registered scans", argv,
-      {{"voxel", true, false, "METRES   voxel size (default 0.02)"},
+      {{"voxel", true, false,
+        "METRES   voxel size (default: from the data — a thousandth of the scans' extent, at least their point "
+        "spacing, between 1 mm and 2 cm; coarser only when the merge would not fit in memory)"},
        {"method", true, false,
         "consensus|ml|tsdf   sub-voxel consensus of the measurements (default, most accurate), S's maximum-likelihood "
         "distance, or Curless-Levoy TSDF (fastest)"},
        {"max-range", true, false, "METRES   leave out returns farther from their scanner (default: all)"},
-       {"sigma", true, false, "METRES   range noise along the line of sight (default 0.012)"},
+       {"sigma", true, false,
+        "METRES   range noise along the line of sight (default 0.012, smaller in proportion when the voxel is sized "
+        "below 2 cm, not below the scans' measured roughness)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
        {"max-memory", true, false,
@@ -98,6 +102,22 @@ int RunMerge(const std::vector<std::string>& argv) {
     return Fail(MakeError(ErrorCode::kInvalidArgument, "merge: no scan of " + project->file.string() +
                                                            " is registered or has an imported pose; run "
                                                            "`scanreg-cli register` first"));
+  }
+  if (!args->Has("voxel") || !args->Has("sigma")) {
+    // Sized to the data, as the GUI's merge panel sizes its voxel: a 20 cm object gets millimetres.
+    Expected<pipeline::MergeOptions> sized = pipeline::SizeMergeToProject(
+        *project, registered_scans, options, !args->Has("voxel"), !args->Has("sigma"), progress, cancel);
+    if (!sized) return Fail(sized.error());
+    options = *sized;
+    const auto metres = [](double v) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.4g m", v);
+      return std::string(text);
+    };
+    std::string what;
+    if (!args->Has("voxel")) what = "voxel " + metres(options.voxel_m);
+    if (!args->Has("sigma")) what += (what.empty() ? "" : ", ") + std::string("range noise ") + metres(options.sigma_m);
+    std::printf("merge: sized to the data (--voxel and --sigma choose others): %s\n", what.c_str());
   }
   if (registered < project->scans.size()) {
     std::fprintf(stderr, "merge: %zu of %zu scans are not registered and are left out\n",

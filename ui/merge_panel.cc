@@ -165,9 +165,13 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   connect(method_, qOverload<int>(&QComboBox::currentIndexChanged), this, later);
   connect(voxel_mm_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, [this, later] {
     voxel_chosen_ = true;  // the panel's own sizing sets it with signals blocked
+    sized_sigma_m_ = 0;
     later();
   });
-  connect(window_->document(), &ProjectDocument::Opened, this, [this] { voxel_chosen_ = false; });
+  connect(window_->document(), &ProjectDocument::Opened, this, [this] {
+    voxel_chosen_ = false;
+    sized_sigma_m_ = 0;
+  });
   connect(max_range_m_, qOverload<double>(&QDoubleSpinBox::valueChanged), this, later);
   connect(keep_moving_, &QCheckBox::toggled, this, later);
   connect(window_->document(), &ProjectDocument::Changed, this, later);
@@ -210,8 +214,10 @@ EstimateOutput CountEstimate(const EstimateInput& in) {
   if (in.size_voxel) {  // a default that finishes in about a minute on this project
     merge::MergeOptions base = in.options;
     base.voxel_m = merge::MergeOptions().voxel_m;
-    const double sized = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, in.strides).voxel_m;
-    out.options.voxel_m = std::clamp(std::round(sized * 1e4) / 1e4, 1e-3, 2.0);
+    base.sigma_m = merge::MergeOptions().sigma_m;
+    const merge::MergeOptions sized = pipeline::SizedMergeOptions(scans, base, 60.0, nullptr, in.strides);
+    out.options.voxel_m = std::clamp(std::round(sized.voxel_m * 1e4) / 1e4, 1e-3, 2.0);
+    out.options.sigma_m = sized.sigma_m;
   }
   out.fits = merge::CheckMergeFits(scans, out.options, &out.estimate, in.strides, /*mesh_on_disk=*/true);
   return out;
@@ -263,6 +269,7 @@ void MergePanel::UpdateEstimate() {
         if (sized && !voxel_chosen_) {
           const QSignalBlocker quiet(voxel_mm_);  // the estimate below is already of this voxel
           voxel_mm_->setValue(out.options.voxel_m * 1000.0);
+          sized_sigma_m_ = out.options.sigma_m;
         }
         if (!out.fits) {
           estimate_->setText(QString::fromStdString(out.fits.error().message));
@@ -272,7 +279,10 @@ void MergePanel::UpdateEstimate() {
         estimate_->setStyleSheet(QString());
         estimate_->setText(tr("Estimate for %n scan(s): ", "", int(scans)) +
                            QString::fromStdString(out.estimate.Describe()) +
-                           (voxel_chosen_ ? QString() : tr(" — voxel sized for this project (set it to choose your own)")));
+                           (voxel_chosen_ ? QString()
+                                          : tr(" — voxel and range noise (%1 mm) sized for this project (set the voxel "
+                                               "to choose your own)")
+                                                .arg(out.options.sigma_m * 1000.0, 0, 'g', 3)));
       });
 }
 
@@ -280,6 +290,7 @@ merge::MergeOptions MergePanel::Options() const {
   merge::MergeOptions options;
   options.method = static_cast<merge::MergeMethod>(method_->currentData().toInt());
   options.voxel_m = voxel_mm_->value() / 1000.0;
+  if (!voxel_chosen_ && sized_sigma_m_ > 0) options.sigma_m = sized_sigma_m_;  // sized with the voxel
   options.smooth_iterations = smooth_->value();
   options.max_range_m = max_range_m_->value();
   options.remove_small_pieces = !keep_pieces_->isChecked();

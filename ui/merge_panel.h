@@ -93,6 +93,7 @@ class MergePanel : public QWidget {
   // The voxel is sized to the project (pipeline::SizedMergeOptions) until the user chooses one; a
   // new project is sized again.
   bool voxel_chosen_ = false;
+  double sized_sigma_m_ = 0;  // the range noise sized with the voxel (0: the default's)
 };
 
 }  // namespace scanreg::ui

@@ -46,11 +46,20 @@ Expected<MergeResult> MergeProjectScans(const io::Project& project, const std::v
 // Merge options sized to the scans (issue 14: a default that finishes): the voxel starts from the
 // data's scale — a thousandth of the scans' median extent, at least their point spacing, between
 // 1 mm and options.voxel_m — and grows until the estimate (merge_estimate.h) takes at most
-// max_seconds and half the memory budget (counts past 500 k blocks extrapolated). *estimate: the
-// estimate of the options returned.
+// max_seconds and half the memory budget (counts past 500 k blocks extrapolated). The range noise
+// sigma shrinks in proportion when the voxel is sized below options.voxel_m, not below the scans'
+// measured roughness (data_scale.h), never above options.sigma_m: the 12 mm that go with 2 cm
+// voxels would blur a 20 cm object. *estimate: the estimate of the options returned.
 // strides: the scans are previews (merge::EstimateMerge); the point spacing is the finest scan's.
 MergeOptions SizedMergeOptions(const std::vector<const Scan*>& scans, MergeOptions options, double max_seconds,
                                MergeEstimate* estimate, const std::vector<int>& strides = {});
+
+// Options sized to the project's scans `which` (SizedMergeOptions on their previews, with no time
+// limit; only the memory budget coarsens the voxel): the voxel when size_voxel (to 0.1 mm), the
+// range noise when size_sigma; the rest as given (scanreg-cli merge without --voxel / --sigma).
+Expected<MergeOptions> SizeMergeToProject(const io::Project& project, const std::vector<int>& which,
+                                          MergeOptions options, bool size_voxel, bool size_sigma,
+                                          ProgressSink& progress, const CancelToken& cancel);
 
 // Writes the mesh by extension: .ply (binary), .obj or .stl (binary); atomic. From a spill too.
 Status WriteMesh(const std::filesystem::path& path, const Mesh& mesh);

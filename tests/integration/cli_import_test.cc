@@ -45,6 +45,21 @@ TEST(CliImport, ConfPosesAreImportedMergedExportedAndKept) {
   RunResult merged = RunCli("merge " + p + " --voxel 0.002 --sigma 0.0005 --out " + Quote(dir / "bunny.ply"));
   ASSERT_EQ(merged.status, 0) << merged.output;
   EXPECT_NE(merged.output.find("merged 3 of 3 scans"), std::string::npos) << merged.output;
+  // Without --voxel and --sigma both are sized to this 15 cm object, not the 2 cm / 12 mm of a street.
+  RunResult sized = RunCli("merge " + p + " --out " + Quote(dir / "sized.ply"));
+  ASSERT_EQ(sized.status, 0) << sized.output;
+  const std::size_t at = sized.output.find("sized to the data (--voxel and --sigma choose others): voxel ");
+  ASSERT_NE(at, std::string::npos) << sized.output;
+  double voxel = 0, sigma = 0;
+  ASSERT_EQ(std::sscanf(sized.output.c_str() + sized.output.find(": voxel ", at), ": voxel %lf m, range noise %lf m",
+                        &voxel, &sigma), 2) << sized.output;
+  EXPECT_GT(voxel, 0.0);
+  EXPECT_LE(voxel, 0.002);
+  EXPECT_LE(sigma, 0.002);
+  // ... and the merge ran with that voxel.
+  const std::size_t from = sized.output.find(": voxel ", at) + 8;
+  const std::string token = sized.output.substr(from, sized.output.find(" m,", from) - from);
+  EXPECT_NE(sized.output.find("(consensus, voxel " + token + " m)"), std::string::npos) << sized.output;
   RunResult clouds = RunCli("export-clouds " + p + " --format las --out " + Quote(dir / "las"));
   ASSERT_EQ(clouds.status, 0) << clouds.output;
   EXPECT_NE(clouds.output.find("exported 3 of 3 scans"), std::string::npos) << clouds.output;

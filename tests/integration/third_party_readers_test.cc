@@ -28,6 +28,7 @@
 #include "core/pipeline/export_clouds.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/project_scans.h"
+#include "core/pipeline/scan_store.h"
 #include "core/simulate/project_sim.h"
 #include "tests/support/test_paths.h"
 
@@ -409,6 +410,63 @@ TEST(ThirdPartyReaders, AnUnstructuredE57FromAnotherProgramKeepsEveryPoint) {
   ASSERT_EQ(read.size(), imported.size());
   EXPECT_LT(WorstDistance(read, imported, 0.005), 1e-4);  // 0.1 mm
   EXPECT_LT(WorstDistance(imported, read, 0.005), 1e-4);
+}
+
+// A 20 cm object merged with the default options (as `scanreg-cli merge` without --voxel or
+// --sigma): the voxel and the range noise are sized to the data, so the mesh VTK reads follows the
+// ten Stanford range scans at their bun.conf poses; the street-sized 2 cm / 12 mm defaults would
+// give a blob of a few hundred vertices on which almost no scan point lies.
+TEST(ThirdPartyReaders, ASmallObjectMergedWithDefaultOptionsFollowsItsScans) {
+  SCANREG_REQUIRE_REALDATA(data);
+  test::TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  const std::filesystem::path bunny = data / "stanford_bunny";
+  pipeline::CreateProjectOptions create;
+  for (const char* name : {"bun000", "bun045", "bun090", "bun180", "bun270", "bun315", "chin", "ear_back", "top2", "top3"})
+    create.scan_files.push_back(bunny / (std::string(name) + ".ply"));
+  create.poses = bunny / "bun.conf";
+  Expected<pipeline::CreatedProject> created = pipeline::CreateProject(dir / "p.scanreg.json", create, progress, cancel);
+  ASSERT_TRUE(created.ok()) << created.error().ToString();
+  const io::Project& project = created->project;
+  std::vector<int> all;
+  for (std::size_t i = 0; i < project.scans.size(); ++i) all.push_back(int(i));
+  Expected<pipeline::MergeOptions> sized =
+      pipeline::SizeMergeToProject(project, all, pipeline::MergeOptions(), true, true, progress, cancel);
+  ASSERT_TRUE(sized.ok()) << sized.error().ToString();
+  std::printf("bunny: voxel %.4g m, range noise %.4g m\n", sized->voxel_m, sized->sigma_m);
+  EXPECT_LE(sized->voxel_m, 0.002);  // the bunny is ~15 cm across, its scans ~0.5 mm apart
+  EXPECT_LE(sized->sigma_m, 0.002);
+  const pipeline::MergeOptions street;  // the defaults a street keeps
+  Expected<pipeline::MergeOptions> kept =
+      pipeline::SizeMergeToProject(project, all, street, false, false, progress, cancel);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(kept->voxel_m, street.voxel_m);
+  Expected<pipeline::MergeResult> merged =
+      pipeline::MergeProjectScans(project, all, *sized, pipeline::DefaultMemoryBudget(), progress, cancel);
+  ASSERT_TRUE(merged.ok()) << merged.error().ToString();
+  ASSERT_TRUE(pipeline::WriteMesh(dir / "bunny.ply", merged->mesh));
+  const std::vector<Eigen::Vector3d> vertices = ReadWithVtk<vtkPLYReader>(dir / "bunny.ply");
+  ASSERT_GT(vertices.size(), 10000u);
+  std::vector<Eigen::Vector3d> scanned;
+  Expected<std::vector<io::NamedPose>> poses = io::ReadBunConf(bunny / "bun.conf");
+  ASSERT_TRUE(poses.ok());
+  for (const io::NamedPose& pose : *poses) {
+    Expected<Scan> s = io::ReadPly(bunny / pose.scan, progress, cancel);
+    ASSERT_TRUE(s.ok()) << s.error().ToString();
+    s->ForEachPoint([&](const Eigen::Vector3f& p, float) { scanned.push_back(pose.world_from_scan * p.cast<double>()); });
+  }
+  const auto share_within = [](const std::vector<double>& d, double limit) {
+    return double(std::count_if(d.begin(), d.end(), [limit](double x) { return x <= limit; })) / d.size();
+  };
+  const double vertices_on_scans = share_within(NearestDistances(vertices, scanned, 0.002), 0.001);
+  std::vector<Eigen::Vector3d> sample;  // every 10th scan point
+  for (std::size_t i = 0; i < scanned.size(); i += 10) sample.push_back(scanned[i]);
+  const double scans_covered = share_within(NearestDistances(sample, vertices, 0.002), 0.001);
+  std::printf("bunny merged with the defaults: %zu vertices, %.1f %% within 1 mm of a scan point, %.1f %% of the "
+              "scan points within 1 mm of a vertex\n", vertices.size(), 100 * vertices_on_scans, 100 * scans_covered);
+  EXPECT_GT(vertices_on_scans, 0.75);
+  EXPECT_GT(scans_covered, 0.95);
 }
 
 // A colour for each point of the coloured scan below, from its position (so any reordering of the

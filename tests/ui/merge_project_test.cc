@@ -34,6 +34,7 @@
 #include "core/io/project.h"
 #include "core/pipeline/create_project.h"
 #include "core/report/report.h"
+#include "tests/support/test_paths.h"
 #include "ui/app_settings.h"
 #include "ui/job_runner.h"
 #include "ui/main_window.h"
@@ -202,6 +203,40 @@ class MergeProjectTest : public QObject {
              qPrintable(QString("%1 then %2 blocks").arg(coarse).arg(blocks())));
     QVERIFY(window.mergePanel()->Run());
     QVERIFY(WaitForJob(window, 300000));
+  }
+
+  // A 15 cm object (the Stanford bunny's ten range scans at their bun.conf poses): the panel sizes
+  // the voxel and the range noise to it (about a millimetre, not a street's 2 cm and 12 mm) and
+  // says so; a voxel the user sets gets the default range noise back.
+  void MergePanelSizesTheVoxelAndNoiseToASmallObject() {
+    const std::filesystem::path data = scanreg::test::RealDataDir();
+    if (data.empty()) QSKIP("real data not found (tests/data/realdata)");
+    QTemporaryDir dir;
+    scanreg::pipeline::CreateProjectOptions create;
+    for (const char* name : {"bun000", "bun045", "bun090", "bun180", "bun270", "bun315", "chin", "ear_back", "top2", "top3"})
+      create.scan_files.push_back(data / "stanford_bunny" / (std::string(name) + ".ply"));
+    create.poses = data / "stanford_bunny" / "bun.conf";
+    scanreg::NullProgress progress;
+    scanreg::CancelToken cancel;
+    const std::filesystem::path path = dir.filePath("bunny.scanreg.json").toStdString();
+    QVERIFY(scanreg::pipeline::CreateProject(path, create, progress, cancel).ok());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.OpenProject(QString::fromStdString(path.string())));
+    QVERIFY(WaitForJob(window, 120000));
+    for (QDockWidget* d : window.findChildren<QDockWidget*>())
+      if (d->windowTitle() == "Merge") d->raise();
+    auto* estimate = window.findChild<QLabel*>("MergeEstimate");
+    QVERIFY(estimate != nullptr);
+    QTRY_VERIFY_WITH_TIMEOUT(estimate->text().contains("sized for this project"), 30000);
+    const scanreg::merge::MergeOptions sized = window.mergePanel()->Options();
+    QVERIFY2(sized.voxel_m <= 0.002, qPrintable(QString::number(sized.voxel_m)));
+    QVERIFY2(sized.sigma_m <= 0.002, qPrintable(QString::number(sized.sigma_m)));
+    scanreg::merge::MergeOptions chosen = sized;
+    chosen.voxel_m = 0.005;
+    window.mergePanel()->SetOptions(chosen);
+    QCOMPARE(window.mergePanel()->Options().voxel_m, 0.005);
+    QCOMPARE(window.mergePanel()->Options().sigma_m, scanreg::merge::MergeOptions().sigma_m);
   }
 
   void MergeThenExportPlyObjStlAndReadBack() {
