@@ -192,7 +192,7 @@ void MergePanel::SetShown(bool shown) {
 namespace {
 
 // What the estimate is counted from, copied for the worker: the registered scans' previews (points,
-// validity, grid and pose only), each standing for its scan (stride^2 points a preview point).
+// validity, listed points, grid and pose only), each standing for its scan (stride^2 points a preview point).
 struct EstimateInput {
   std::vector<Scan> scans;
   std::vector<int> strides;
@@ -248,6 +248,8 @@ void MergePanel::UpdateEstimate() {
     copy.rows = preview.rows, copy.cols = preview.cols;
     copy.points = preview.points;
     copy.valid = preview.valid;
+    copy.list_points = preview.list_points;  // merged as discs: counted too
+    copy.single_viewpoint = preview.single_viewpoint;
     copy.world_from_scan = preview.world_from_scan;
     input->strides.push_back(window_->previews()[i].stride);
   }
