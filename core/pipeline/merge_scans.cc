@@ -249,8 +249,10 @@ Expected<MergeOptions> SizeMergeToProject(const io::Project& project, const std:
   std::vector<const Scan*> scans;
   std::vector<int> strides;
   for (const ScanPreview& p : *previews) scans.push_back(&p.scan), strides.push_back(p.stride);
-  const MergeOptions sized =
-      SizedMergeOptions(scans, options, std::numeric_limits<double>::infinity(), nullptr, strides);
+  MergeOptions base = options;  // sized from the defaults, whatever voxel or noise the user gave
+  base.voxel_m = MergeOptions().voxel_m;
+  base.sigma_m = MergeOptions().sigma_m;
+  const MergeOptions sized = SizedMergeOptions(scans, base, std::numeric_limits<double>::infinity(), nullptr, strides);
   if (size_voxel) options.voxel_m = std::max(1e-4, std::round(sized.voxel_m * 1e4) / 1e4);
   if (size_sigma) options.sigma_m = sized.sigma_m;
   return options;
