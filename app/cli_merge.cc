@@ -6,6 +6,7 @@
 #include "app/cli_commands.h"
 #include "app/cli_util.h"
 #include "core/io/output_paths.h"
+#include "core/merge/vertex_info.h"
 #include "core/pipeline/merge_scans.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/scan_store.h"
@@ -28,6 +29,9 @@ int RunMerge(const std::vector<std::string>& argv) {
         "below 2 cm, not below the scans' measured roughness)"},
        {"smooth", true, false, "N        mean-filter passes over the field (default 0)"},
        {"keep-pieces", false, false, "         keep small disconnected pieces"},
+       {"fill-holes", false, false,
+        "         fill the consensus's holes between samples wider apart than the voxel from the nearest "
+        "measurement (the filled vertices are marked: the PLY's scalar_gap = metres to the nearest scan point)"},
        {"max-memory", true, false,
         "SIZE     refuse a merge estimated above this (e.g. 20G, 900M; a bare number is GB; default: 3/4 of this "
         "machine's memory)"},
@@ -70,6 +74,7 @@ int RunMerge(const std::vector<std::string>& argv) {
     scan_budget = *parsed;
   }
   options.remove_small_pieces = !args->Has("keep-pieces");
+  options.fill_holes = args->Has("fill-holes");
   options.remove_moving = !args->Has("keep-moving");
   const std::string method = args->Get("method").value_or(merge::MergeMethodName(options.method));
   if (const std::optional<merge::MergeMethod> parsed = merge::ParseMergeMethod(method)) {
@@ -146,6 +151,12 @@ int RunMerge(const std::vector<std::string>& argv) {
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
               project->scans.size(), merge::MergeMethodName(options.method), options.voxel_m,
               mesh.triangle_count(), mesh.vertex_count(), result->seconds, out->c_str());
+  std::printf("%zu of %zu vertices (%.1f %%) lie farther than %.4g m (1.5 voxels) from every scan point: surface "
+              "interpolated, not measured%s (the PLY's scalar_gap: metres to the nearest scan point; CloudCompare's scalar field \"gap\")\n",
+              result->interpolated_vertices, mesh.vertex_count(),
+              mesh.vertex_count() ? 100.0 * double(result->interpolated_vertices) / double(mesh.vertex_count()) : 0.0,
+              merge::FilledGap(options.voxel_m), options.fill_holes ? ", holes filled (--fill-holes)" : "");
+  if (mesh.coloured()) std::printf("vertex colour: the scanners' colour at the nearest coloured scan point\n");
   return 0;
 }
 

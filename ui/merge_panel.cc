@@ -51,6 +51,8 @@ struct MergePanel::MergedMesh {
   double voxel_m = 0.0;
   std::size_t moving_points = 0;
   bool removed_moving = false;
+  std::size_t interpolated_vertices = 0;  // merge::MergeResult's
+  bool fill_holes = false;
 };
 
 MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), window_(window), scene_(scene) {
@@ -80,6 +82,11 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   max_range_m_->setToolTip(tr("Returns farther from their scanner are left out (sparse, noisy far returns)."));
   keep_pieces_ = new QCheckBox(tr("Keep small disconnected pieces"), this);
   keep_pieces_->setObjectName("MergeKeepPieces");
+  fill_holes_ = new QCheckBox(tr("Fill holes (interpolated surface marked)"), this);
+  fill_holes_->setObjectName("MergeFillHoles");
+  fill_holes_->setToolTip(tr("The consensus leaves a hole where the samples lie farther apart than the voxel; filled, "
+                             "the surface there comes from the nearest measurement. Every exported PLY vertex holds "
+                             "its distance to the nearest scan point (scalar_gap; \"gap\" in CloudCompare)."));
   keep_moving_ = new QCheckBox(tr("Keep moving objects (vehicles, people)"), this);
   keep_moving_->setObjectName("MergeKeepMoving");
   keep_moving_->setToolTip(tr("Points one scanner saw where another saw through are moving objects; by default "
@@ -91,6 +98,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   form->addRow(tr("Smoothing"), smooth_);
   form->addRow(tr("Max range"), max_range_m_);
   form->addRow(QString(), keep_pieces_);
+  form->addRow(QString(), fill_holes_);
   form->addRow(QString(), keep_moving_);
 
   run_ = new QPushButton(tr("Merge registered scans"), this);
@@ -145,6 +153,7 @@ MergePanel::MergePanel(MainWindow* window, ScanScene* scene) : QWidget(window), 
   options.max_range_m = settings.value("merge/max_range_m", defaults.max_range_m).toDouble();
   options.remove_small_pieces = settings.value("merge/remove_small_pieces", defaults.remove_small_pieces).toBool();
   options.remove_moving = settings.value("merge/remove_moving", defaults.remove_moving).toBool();
+  options.fill_holes = settings.value("merge/fill_holes", defaults.fill_holes).toBool();
   SetOptions(options.Validate() ? options : defaults);
   voxel_chosen_ = false;  // remembered from another project: sized to the next one
 
@@ -297,6 +306,7 @@ merge::MergeOptions MergePanel::Options() const {
   options.max_range_m = max_range_m_->value();
   options.remove_small_pieces = !keep_pieces_->isChecked();
   options.remove_moving = !keep_moving_->isChecked();
+  options.fill_holes = fill_holes_->isChecked();
   return options;
 }
 
@@ -307,6 +317,7 @@ void MergePanel::SetOptions(const merge::MergeOptions& options) {
   max_range_m_->setValue(options.max_range_m);
   keep_pieces_->setChecked(!options.remove_small_pieces);
   keep_moving_->setChecked(!options.remove_moving);
+  fill_holes_->setChecked(options.fill_holes);
 }
 
 void MergePanel::SaveOptions() const {
@@ -318,6 +329,7 @@ void MergePanel::SaveOptions() const {
   settings.setValue("merge/max_range_m", options.max_range_m);
   settings.setValue("merge/remove_small_pieces", options.remove_small_pieces);
   settings.setValue("merge/remove_moving", options.remove_moving);
+  settings.setValue("merge/fill_holes", options.fill_holes);
 }
 
 bool MergePanel::Run() {
@@ -367,7 +379,9 @@ bool MergePanel::Run() {
                           options.method,
                           options.voxel_m,
                           r->moving_points,
-                          options.remove_moving};
+                          options.remove_moving,
+                          r->interpolated_vertices,
+                          options.fill_holes};
       },
       [this](MergedMesh& merged) { OnMerged(merged); });
 }
@@ -420,6 +434,11 @@ void MergePanel::OnMerged(const MergedMesh& merged) {
   if (merged.removed_moving)
     text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).")
                 .arg(merged.moving_points);
+  if (mesh_->vertex_count() > 0)
+    text += tr("\n%1 % of the vertices lie over 1.5 voxels from every scan point: interpolated%2.")
+                .arg(100.0 * double(merged.interpolated_vertices) / double(mesh_->vertex_count()), 0, 'f', 1)
+                .arg(merged.fill_holes ? tr(", holes filled") : QString());
+  if (mesh_->coloured()) text += tr("\nColoured by the scanners' colour.");
   summary_->setText(text);
 }
 

@@ -77,6 +77,7 @@ class MergePanel : public QWidget {
   QSpinBox* smooth_ = nullptr;
   QDoubleSpinBox* max_range_m_ = nullptr;
   QCheckBox* keep_pieces_ = nullptr;
+  QCheckBox* fill_holes_ = nullptr;
   QCheckBox* keep_moving_ = nullptr;
   QCheckBox* show_scans_ = nullptr;
   QCheckBox* show_mesh_ = nullptr;

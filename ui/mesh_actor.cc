@@ -9,12 +9,14 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <vector>
 
 namespace scanreg::ui {
 
-vtkSmartPointer<vtkActor> MakeMeshActor(const merge::Mesh& mesh, const Eigen::Vector3d& scene_origin) {
+vtkSmartPointer<vtkActor> MakeMeshActor(const merge::Mesh& mesh, const Eigen::Vector3d& scene_origin,
+                                        bool scanner_colour) {
   const Eigen::Vector3f shift = (mesh.origin - scene_origin).cast<float>();
   const vtkIdType nv = static_cast<vtkIdType>(mesh.vertices.size());
   auto xyz = vtkSmartPointer<vtkFloatArray>::New();
@@ -57,6 +59,16 @@ vtkSmartPointer<vtkActor> MakeMeshActor(const merge::Mesh& mesh, const Eigen::Ve
   auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   mapper->SetInputData(poly);
   mapper->ScalarVisibilityOff();
+  if (scanner_colour && mesh.coloured && mesh.info.size() == mesh.vertices.size()) {
+    auto rgb = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    rgb->SetName("Colour");
+    rgb->SetNumberOfComponents(3);
+    rgb->SetNumberOfTuples(nv);
+    for (vtkIdType v = 0; v < nv; ++v) rgb->SetTypedTuple(v, mesh.info[v].colour.data());
+    poly->GetPointData()->SetScalars(rgb);
+    mapper->ScalarVisibilityOn();
+    mapper->SetColorModeToDirectScalars();
+  }
   auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
   vtkProperty* property = actor->GetProperty();

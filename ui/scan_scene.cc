@@ -124,7 +124,8 @@ void ScanScene::Rebuild(bool reset_camera) {
     per_scan = decimated_points_ / std::max<std::size_t>(1, drawn);
   }
   actors_ = MakeScanActors(*scans_, project_, colouring_, per_scan);
-  mesh_actor_ = mesh_ ? MakeMeshActor(*mesh_, SceneOrigin(project_)) : nullptr;
+  mesh_actor_ = mesh_ ? MakeMeshActor(*mesh_, SceneOrigin(project_), colouring_ == CloudColouring::kScannerColour)
+                      : nullptr;
   std::vector<vtkSmartPointer<vtkActor>> all = actors_.All();
   if (mesh_actor_) all.push_back(mesh_actor_);
   first_shown_ = all.empty() ? nullptr : all.front();

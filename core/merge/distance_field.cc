@@ -51,6 +51,11 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
   votes.clear();
   float d_min = std::numeric_limits<float>::max();
   Eigen::Vector3f nearest_normal = Eigen::Vector3f::Zero();
+  // fill_holes: the patches x lies over (inside a wide triangle or disc), their noise-weighted
+  // signed distances, and the nearest one's distance.
+  float over_d = std::numeric_limits<float>::max();
+  double over_sum = 0.0, over_w = 0.0;
+  const float on_patch2 = 1e-6f * h * h;
   for (int id : candidates) {
     const Patch& p = patches.patches[id];
     const Eigen::Vector3f& a = patches.points[p.v[0]];
@@ -59,6 +64,15 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     const Eigen::Vector3f closest = patches.Closest(id, x);
     const float d = (closest - x).norm();
     if (d < d_min) d_min = d, nearest_normal = p.normal;
+    if (options.fill_holes && d <= band) {  // x over the patch: its closest point is x's projection
+      const Eigen::Vector3f off = x - closest;
+      const float across = off.dot(p.normal);
+      if (off.squaredNorm() - across * across <= on_patch2) {
+        const float cos_phi = patches.SightCosine(p, closest, p.normal);
+        const double w = 1.0 / (sigma2 * cos_phi * cos_phi);
+        over_d = std::min(over_d, d), over_sum += w * across, over_w += w;
+      }
+    }
     const Eigen::Vector3f centre = (a + b + c) / 3.0f;
     const Eigen::Vector3f to_x = x - centre;
     const float s = to_x.dot(p.normal);  // > 0: x in front of the patch (its normal faces its scanner)
@@ -69,8 +83,17 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     const float cos_phi = patches.SightCosine(p, centre, p.normal);
     votes.push_back({to_x, p.normal, std::exp(-double(t2) / (h * h)) / (sigma2 * cos_phi * cos_phi)});
   }
-  // No measurement near, or none beside x along the surface: no surface invented here (a hole stays a hole).
-  if (d_min > band || votes.empty()) return false;
+  if (d_min > band) return false;  // no measurement near
+  if (votes.empty()) {
+    // None beside x along the surface: no surface invented here (a hole stays a hole), unless the
+    // user asked for holes filled — then, where x lies over a patch (inside a wide triangle, not
+    // beside a surface's edge), that patch's plane with a token weight (the vertices there are
+    // marked: vertex_info.h).
+    if (!options.fill_holes || over_d > d_min + 1e-3f * h) return false;  // the nearest surface's edge: no
+    *distance = float(over_sum / over_w);
+    *weight = 1e-6f;
+    return true;
+  }
   // The consensus normal of the surface nearest x (patches facing the other way - the far side of a
   // thin wall - do not vote), then each patch's signed distance along it: one triangle's normal is
   // as noisy as its three points, and x lies up to a voxel beside it.

@@ -138,6 +138,7 @@ Mesh MeshBuilder::Take() {
   Mesh taken = std::move(mesh_);
   mesh_ = Mesh();
   mesh_.origin = taken.origin;
+  mesh_.coloured = taken.coloured;
   flushed_ += int(taken.vertices.size());
   return taken;
 }

@@ -7,6 +7,7 @@
 #include "core/merge/distance_field.h"
 #include "core/merge/marching_cubes.h"
 #include "core/merge/range_patches.h"
+#include "core/merge/vertex_info.h"
 
 #include <string>
 
@@ -140,6 +141,7 @@ Status MergeTile(const ScanSource& scans, const FirstPass& first, const MergeOpt
     for (float w : grid->block(b).weight) result->known_voxels += w > 0.0f;
   }
   builder->Add(*grid, &own);
+  DescribeVertices(*patches, options.voxel_m, &builder->mesh());
   return Status::Ok();
 }
 
@@ -180,7 +182,6 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
     SubProgress field_progress(progress, 0.04, 0.9);
     auto grid = ComputeField(*patches, options, field_progress, cancel);
     if (!grid) return grid.error();
-    patches = MakeError(ErrorCode::kFailed, "freed");
     result.blocks = grid->num_blocks();
     result.field_bytes = grid->MemoryBytes();
     for (std::size_t b = 0; b < grid->num_blocks(); ++b) {
@@ -189,6 +190,9 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "merge cancelled");
     progress.Report(0.9, "marching cubes");
     builder.Add(*grid);
+    grid = MakeError(ErrorCode::kFailed, "freed");
+    DescribeVertices(*patches, options.voxel_m, &builder.mesh());
+    patches = MakeError(ErrorCode::kFailed, "freed");
     if (Status s = to_spill(); !s) return s.error();
   } else {  // tile by tile (issue 13, item 5): memory of one tile's pieces, patches and field
     const double reach = CandidateRadius(options) + first->max_patch_edge + options.voxel_m;
@@ -226,6 +230,10 @@ Expected<MergeResult> MergeScanSet(const ScanSource& scans, const MergeOptions& 
                      "merge: the field has no zero crossing; the voxel may be too large for the data or the band too "
                      "thin (try a smaller voxel size)");
   }
+  auto interpolated = spill ? CountInterpolated(*spill, options.voxel_m)
+                            : CountInterpolated(InMemoryMesh(result.mesh), options.voxel_m);
+  if (!interpolated) return interpolated.error();
+  result.interpolated_vertices = *interpolated;
   progress.Report(1.0, "done");
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -40,6 +40,11 @@ struct MergeOptions {
   // The field is built and meshed in tiles of this many 8^3-voxel blocks across (x and y; 256 voxels:
   // 5 m at 2 cm), so its memory is one tile's, whatever the project's size (0: one piece).
   int tile_blocks = 32;
+  // The consensus leaves a hole where no measurement lies within a voxel along the surface (between
+  // samples wider apart than the voxel: far surfaces at a fine voxel). Filled, the field there comes
+  // from the nearest range-image triangle or disc; every merge marks such vertices (VertexInfo::gap_m
+  // beyond FilledGap). TSDF and ML interpolate over the triangles whatever this says.
+  bool fill_holes = false;
   double max_grazing_deg = 85.0;   // degrees: range-image triangles seen more obliquely are not patches
   // metres: returns farther from their scanner are left out (0 = all). Far returns are sparse and
   // noisy, and they spread the field over a large area (the street's ground to 200 m).

@@ -76,9 +76,11 @@ std::size_t RemoveSmallPieces(Mesh& mesh, double min_fraction) {
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
     if (remap[v] < 0) continue;
     remap[v] = used;
+    if (!mesh.info.empty()) mesh.info[used] = mesh.info[v];
     mesh.vertices[used++] = mesh.vertices[v];
   }
   mesh.vertices.resize(used);
+  if (!mesh.info.empty()) mesh.info.resize(used);
   for (auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) t[k] = remap[t[k]];
   return removed;

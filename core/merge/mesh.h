@@ -6,12 +6,25 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/geometry/scan.h"
+
 namespace scanreg::merge {
+
+// What the measurements say at a merged vertex (issues 34 and 35): the colour of the scan point
+// nearest it, and how far that point is — a vertex far from every measured point lies on surface
+// the field interpolated (a filled hole, or the inside of a wide range-image triangle).
+struct VertexInfo {
+  Rgb colour{};       // the nearest coloured scan point's; black when no scan point near has colour
+  float gap_m = 0.0f;  // metres to the nearest scan point, at most kMaxGapVoxels voxels
+};
+constexpr double kMaxGapVoxels = 4.0;
 
 struct Mesh {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // world position of vertex (0, 0, 0)
   std::vector<Eigen::Vector3f> vertices;             // metres, world minus origin
   std::vector<Eigen::Vector3i> triangles;            // counter-clockwise seen from outside
+  std::vector<VertexInfo> info;                      // one per vertex, or empty (not described)
+  bool coloured = false;                             // info holds the scans' colour
 };
 
 struct EdgeCounts {

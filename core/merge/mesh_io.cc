@@ -57,14 +57,29 @@ class ChunkedOutput {
   std::string bytes_;
 };
 
-// The vertices in world coordinates, as PLY doubles.
+// The PLY vertex properties WriteWorldVertices writes.
+std::string VertexProperties(const MeshSource& mesh) {
+  std::string out = kDoubleVertex;
+  if (mesh.coloured()) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (mesh.described()) out += "property float scalar_gap\n";
+  return out;
+}
+
+// The vertices in world coordinates, as PLY doubles, with their colour and gap (VertexProperties).
 Status WriteWorldVertices(const MeshSource& mesh, ChunkedOutput& output) {
   const Eigen::Vector3d origin = mesh.origin();
-  return mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+  const bool coloured = mesh.coloured(), described = mesh.described();
+  return mesh.ForEachVertex([&](const Eigen::Vector3f& v, const VertexInfo& info) {
     AppendWorld(output.bytes(), origin, v);
+    if (coloured) Append(output.bytes(), info.colour);
+    if (described) Append(output.bytes(), info.gap_m);
     return output.Drain();
   });
 }
+
+const char* kQualityComment =
+    "comment scalar_gap: metres from the vertex to the nearest scan point (beyond 1.5 voxels: surface the merge "
+    "interpolated, not measured)\n";
 
 }  // namespace
 
@@ -73,9 +88,10 @@ double FloatRoundingError(double magnitude) {
   return 0.5 * (std::nextafter(f, std::numeric_limits<float>::infinity()) - f);
 }
 
-Status InMemoryMesh::ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const {
-  for (const auto& v : mesh_.vertices)
-    if (Status s = f(v); !s) return s;
+Status InMemoryMesh::ForEachVertex(const VertexVisitor& f) const {
+  const VertexInfo none;
+  for (std::size_t i = 0; i < mesh_.vertices.size(); ++i)
+    if (Status s = f(mesh_.vertices[i], mesh_.info.empty() ? none : mesh_.info[i]); !s) return s;
   return Status::Ok();
 }
 
@@ -90,7 +106,8 @@ Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh) {
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
-  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex;
+  if (mesh.described()) out += kQualityComment;
+  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + VertexProperties(mesh);
   out += "element face " + std::to_string(mesh.triangle_count()) +
          "\nproperty list uchar int vertex_indices\nend_header\n";
   if (Status s = WriteWorldVertices(mesh, output); !s) return s;
@@ -112,8 +129,14 @@ Status WriteMeshObj(const std::filesystem::path& path, const MeshSource& mesh) {
         std::to_string(mesh.triangle_count()) + " triangles, absolute coordinates (metres)\n";
   char buf[128];
   const Eigen::Vector3d origin = mesh.origin();
-  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+  const bool coloured = mesh.coloured();
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v, const VertexInfo& info) {
         const Eigen::Vector3d p = origin + v.cast<double>();
+        if (coloured) {
+          out.append(buf, std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f %.4f %.4f %.4f\n", p.x(), p.y(), p.z(),
+                                        info.colour[0] / 255.0, info.colour[1] / 255.0, info.colour[2] / 255.0));
+          return output.Drain();
+        }
         out.append(buf, std::snprintf(buf, sizeof buf, "v %.6f %.6f %.6f\n", p.x(), p.y(), p.z()));
         return output.Drain();
       });
@@ -131,7 +154,7 @@ Status WriteMeshObj(const std::filesystem::path& path, const MeshSource& mesh) {
 Status WriteMeshStl(const std::filesystem::path& path, const MeshSource& mesh) {
   std::vector<Eigen::Vector3f> vertices;  // each triangle's corners are written
   vertices.reserve(mesh.vertex_count());
-  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+  if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v, const VertexInfo&) {
         vertices.push_back(v);
         return Status::Ok();
       });
@@ -190,7 +213,8 @@ Status WritePointCloudPly(const std::filesystem::path& path, const MeshSource& m
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
-  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + kDoubleVertex + "end_header\n";
+  if (mesh.described()) out += kQualityComment;
+  out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + VertexProperties(mesh) + "end_header\n";
   if (Status s = WriteWorldVertices(mesh, output); !s) return s;
   return output.Commit();
 }

@@ -26,8 +26,12 @@ class MeshSource {
   virtual Eigen::Vector3d origin() const = 0;
   virtual std::size_t vertex_count() const = 0;
   virtual std::size_t triangle_count() const = 0;
+  // The vertices carry what the measurements say of them (VertexInfo; a default one when not).
+  virtual bool described() const = 0;
+  virtual bool coloured() const = 0;  // described with the scans' colour
   // f on every vertex (relative to the origin) / triangle, in order; stops at f's first error.
-  virtual Status ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const = 0;
+  using VertexVisitor = std::function<Status(const Eigen::Vector3f&, const VertexInfo&)>;
+  virtual Status ForEachVertex(const VertexVisitor& f) const = 0;
   virtual Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const = 0;
 };
 
@@ -37,13 +41,18 @@ class InMemoryMesh : public MeshSource {
   Eigen::Vector3d origin() const override { return mesh_.origin; }
   std::size_t vertex_count() const override { return mesh_.vertices.size(); }
   std::size_t triangle_count() const override { return mesh_.triangles.size(); }
-  Status ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const override;
+  bool described() const override { return !mesh_.info.empty(); }
+  bool coloured() const override { return described() && mesh_.coloured; }
+  Status ForEachVertex(const VertexVisitor& f) const override;
   Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const override;
 
  private:
   const Mesh& mesh_;
 };
 
+// PLY writes each vertex's colour as uchar red green blue (when coloured) and its gap (VertexInfo)
+// as float scalar_gap, in metres (when described; CloudCompare reads it as the scalar field "gap",
+// PCL as a field); OBJ the colour after x y z (0..1, as MeshLab reads it); STL neither.
 // Streamed: PLY and OBJ hold a few megabytes of the file at a time; STL holds the vertices (it
 // writes each triangle's corners).
 Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh);  // binary little-endian

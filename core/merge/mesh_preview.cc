@@ -25,8 +25,11 @@ Expected<Mesh> WholeMesh(const MeshSource& source) {
   mesh.origin = source.origin();
   mesh.vertices.reserve(source.vertex_count());
   mesh.triangles.reserve(source.triangle_count());
-  if (Status s = source.ForEachVertex([&](const Eigen::Vector3f& v) {
+  mesh.coloured = source.coloured();
+  if (source.described()) mesh.info.reserve(source.vertex_count());
+  if (Status s = source.ForEachVertex([&](const Eigen::Vector3f& v, const VertexInfo& info) {
         mesh.vertices.push_back(v);
+        if (source.described()) mesh.info.push_back(info);
         return Status::Ok();
       });
       !s)
@@ -48,12 +51,21 @@ Expected<std::optional<Mesh>> Cluster(const MeshSource& source, double cell, std
   std::vector<std::uint32_t> cluster_of;  // per source vertex
   cluster_of.reserve(source.vertex_count());
   std::vector<Eigen::Vector3d> sums;
+  std::vector<Eigen::Vector3f> colour_sums;  // when the source is coloured
+  std::vector<float> gaps;                   // the largest per cluster, when described
   std::vector<std::uint32_t> counts;
-  if (Status s = source.ForEachVertex([&](const Eigen::Vector3f& v) {
+  const bool coloured = source.coloured(), described = source.described();
+  if (Status s = source.ForEachVertex([&](const Eigen::Vector3f& v, const VertexInfo& info) {
         const Cell key{std::int32_t(std::floor(v.x() / cell)), std::int32_t(std::floor(v.y() / cell)),
                        std::int32_t(std::floor(v.z() / cell))};
         auto [it, added] = cells.emplace(key, std::uint32_t(sums.size()));
-        if (added) sums.emplace_back(Eigen::Vector3d::Zero()), counts.push_back(0);
+        if (added) {
+          sums.emplace_back(Eigen::Vector3d::Zero()), counts.push_back(0);
+          if (coloured) colour_sums.emplace_back(Eigen::Vector3f::Zero());
+          if (described) gaps.push_back(0.0f);
+        }
+        if (coloured) colour_sums[it->second] += Eigen::Vector3f(info.colour[0], info.colour[1], info.colour[2]);
+        if (described) gaps[it->second] = std::max(gaps[it->second], info.gap_m);
         sums[it->second] += v.cast<double>();
         ++counts[it->second];
         cluster_of.push_back(it->second);
@@ -97,12 +109,22 @@ Expected<std::optional<Mesh>> Cluster(const MeshSource& source, double cell, std
   std::vector<std::int32_t> index(sums.size(), -1);
   Mesh mesh;
   mesh.origin = source.origin();
+  mesh.coloured = coloured;
   for (Eigen::Vector3i& t : triangles)
     for (int k = 0; k < 3; ++k) {
       std::int32_t& id = index[t[k]];
       if (id < 0) {
         id = std::int32_t(mesh.vertices.size());
         mesh.vertices.push_back((sums[t[k]] / double(counts[t[k]])).cast<float>());
+        if (described) {
+          VertexInfo info;
+          info.gap_m = gaps[t[k]];
+          if (coloured) {
+            const Eigen::Vector3f c = colour_sums[t[k]] / float(counts[t[k]]);
+            info.colour = ToRgb(c.x(), c.y(), c.z());
+          }
+          mesh.info.push_back(info);
+        }
       }
       t[k] = id;
     }

@@ -13,6 +13,12 @@ namespace scanreg::merge {
 
 namespace {
 
+// A vertex in the spill: its position and what the measurements say of it.
+struct SpilledVertex {
+  Eigen::Vector3f position;
+  VertexInfo info;
+};
+
 constexpr std::uint32_t kDropped = std::numeric_limits<std::uint32_t>::max();
 constexpr std::size_t kChunkItems = 1 << 18;  // read back 256 k vertices or triangles at a time
 
@@ -80,8 +86,15 @@ Status MeshSpill::Append(Mesh& piece) {
   const std::size_t first = vertices_;
   if (first + piece.vertices.size() >= 0x7FFFFFFFu)  // ids are int, and the pieces' marks need the top bit
     return MakeError(ErrorCode::kInvalidArgument, "merge: the mesh has more than 2 billion vertices; use a larger voxel");
-  if (Status s = Flush(vertex_file_, vertex_path_, piece.vertices.data(), piece.vertices.size() * sizeof(Eigen::Vector3f));
-      !s)
+  if (first == 0) described_ = !piece.info.empty(), coloured_ = piece.coloured;
+  described_ = described_ && piece.info.size() == piece.vertices.size();
+  coloured_ = coloured_ || piece.coloured;
+  std::vector<SpilledVertex> records(piece.vertices.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    records[i].position = piece.vertices[i];
+    if (i < piece.info.size()) records[i].info = piece.info[i];
+  }
+  if (Status s = Flush(vertex_file_, vertex_path_, records.data(), records.size() * sizeof(SpilledVertex)); !s)
     return s;
   if (Status s = Flush(triangle_file_, triangle_path_, piece.triangles.data(),
                        piece.triangles.size() * sizeof(Eigen::Vector3i));
@@ -99,6 +112,7 @@ Status MeshSpill::Append(Mesh& piece) {
   kept_vertices_ = vertices_, kept_triangles_ = triangles_;
   piece.vertices = {};
   piece.triangles = {};
+  piece.info = {};
   return Status::Ok();
 }
 
@@ -150,12 +164,12 @@ Expected<std::size_t> MeshSpill::RemoveSmallPieces(double min_fraction) {
   return triangles_ - kept_triangles;
 }
 
-Status MeshSpill::ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const {
+Status MeshSpill::ForEachVertex(const VertexVisitor& f) const {
   std::size_t v = 0;
-  return ReadBack<Eigen::Vector3f>(vertex_file_, vertex_path_, vertices_, [&](const Eigen::Vector3f* p, std::size_t n) {
+  return ReadBack<SpilledVertex>(vertex_file_, vertex_path_, vertices_, [&](const SpilledVertex* p, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i, ++v) {
       if (renumbered_ && parent_[v] == kDropped) continue;
-      if (Status s = f(p[i]); !s) return s;
+      if (Status s = f(p[i].position, p[i].info); !s) return s;
     }
     return Status::Ok();
   });

@@ -38,7 +38,9 @@ class MeshSpill : public MeshSource {
   Eigen::Vector3d origin() const override { return origin_; }
   std::size_t vertex_count() const override { return kept_vertices_; }
   std::size_t triangle_count() const override { return kept_triangles_; }
-  Status ForEachVertex(const std::function<Status(const Eigen::Vector3f&)>& f) const override;
+  bool described() const override { return described_; }
+  bool coloured() const override { return described_ && coloured_; }
+  Status ForEachVertex(const VertexVisitor& f) const override;
   Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const override;
 
  private:
@@ -54,6 +56,7 @@ class MeshSpill : public MeshSource {
   std::size_t kept_vertices_ = 0, kept_triangles_ = 0;  // after RemoveSmallPieces
   std::vector<std::uint32_t> parent_;  // union-find over vertices; after RemoveSmallPieces: new ids
   bool renumbered_ = false;
+  bool described_ = false, coloured_ = false;  // every piece appended was (described: the first one)
 };
 
 }  // namespace scanreg::merge

@@ -6,27 +6,9 @@
 #include <cstdint>
 #include <queue>
 
-#include <nanoflann.hpp>
+#include "core/merge/point_tree.h"
 
 namespace scanreg::merge {
-
-namespace {
-
-// The points as nanoflann reads them (the caller's vector, not copied).
-struct Cloud {
-  const std::vector<Eigen::Vector3f>* pts;
-  std::size_t kdtree_get_point_count() const { return pts->size(); }
-  float kdtree_get_pt(std::uint32_t i, std::size_t d) const { return (*pts)[i][static_cast<Eigen::Index>(d)]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud, float, std::uint32_t>,
-                                                 Cloud, 3, std::uint32_t>;
-
-}  // namespace
 
 PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* eye, const Eigen::Vector3f& fallback_eye, int k,
                                   const CancelToken& cancel) {
@@ -35,8 +17,8 @@ PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, co
   out.normal.assign(n, Eigen::Vector3f::Zero());
   if (n < 3) return out;
   k = std::clamp(k, 3, int(std::min<std::size_t>(n, 64)));
-  Cloud cloud{&points};
-  Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  PointTreeCloud cloud{&points};
+  PointTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   // The neighbours of every point (itself first), kept for the orientation.
   std::vector<std::uint32_t> neighbours(n * std::size_t(k));
   std::vector<float> nearest(n), kth(n);

@@ -100,39 +100,64 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
 // stations. Measured (`scanreg-bench --section lists`: 21.6 M points, 5 cm voxel) against keeping
 // every m-th point by the median spacing: 260 s against 249 s, 7.39 M vertices against 5.54 M (fewer
 // holes where the cloud is sparse), peak 5.7 GB against 6.9 GB; quarter-voxel cubes: 475 s.
-std::vector<Eigen::Vector3f> DiscPoints(const Scan& s, const Eigen::Isometry3f& t, double voxel_m) {
+struct DiscSource {
   std::vector<Eigen::Vector3f> points;
-  const bool every_point = !s.single_viewpoint;
+  std::vector<Rgb> colours;  // per point when the scan has colour
+};
+DiscSource DiscPoints(const Scan& s, const Eigen::Isometry3f& t, double voxel_m) {
+  DiscSource out;
+  std::vector<Eigen::Vector3f>& points = out.points;
+  const bool every_point = !s.single_viewpoint, coloured = s.HasColour();
   points.reserve(s.list_points.size() + (every_point ? s.CountValid() : 0));
-  if (every_point)
-    for (std::size_t i = 0; i < s.size(); ++i)
-      if (s.valid[i]) points.push_back(t * s.points[i]);
+  if (every_point) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (!s.valid[i]) continue;
+      points.push_back(t * s.points[i]);
+      if (coloured) out.colours.push_back(s.colour[i]);
+    }
+  }
   for (const Eigen::Vector3f& p : s.list_points) points.push_back(t * p);
-  if (!(voxel_m > 0.0)) return points;
+  if (coloured) out.colours.insert(out.colours.end(), s.list_colour.begin(), s.list_colour.end());
+  if (!(voxel_m > 0.0)) return out;
   const double cell = 0.5 * voxel_m;
   std::unordered_map<BlockKey, std::uint32_t, BlockKeyHash> index;  // cube -> its centroid's slot
   std::vector<Eigen::Vector3d> sum;
+  std::vector<Eigen::Vector3d> colour_sum;
   std::vector<std::uint32_t> count;
   index.reserve(points.size() / 4);
-  for (const Eigen::Vector3f& p : points) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
     const BlockKey key{int(std::floor(p.x() / cell)), int(std::floor(p.y() / cell)), int(std::floor(p.z() / cell))};
     const auto [it, added] = index.try_emplace(key, std::uint32_t(sum.size()));
-    if (added) sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
+    if (added) {
+      sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
+      if (coloured) colour_sum.emplace_back(Eigen::Vector3d::Zero());
+    }
     sum[it->second] += p.cast<double>();
+    if (coloured) colour_sum[it->second] += Eigen::Vector3d(out.colours[i][0], out.colours[i][1], out.colours[i][2]);
     ++count[it->second];
   }
-  if (sum.size() == points.size()) return points;  // no cube holds two: as they are
+  if (sum.size() == points.size()) return out;  // no cube holds two: as they are
   points.clear();
-  for (std::size_t k = 0; k < sum.size(); ++k) points.push_back((sum[k] / double(count[k])).cast<float>());
+  out.colours.clear();
+  for (std::size_t k = 0; k < sum.size(); ++k) {
+    points.push_back((sum[k] / double(count[k])).cast<float>());
+    if (coloured) {
+      const Eigen::Vector3d c = colour_sum[k] / double(count[k]);
+      out.colours.push_back(ToRgb(c.x(), c.y(), c.z()));
+    }
+  }
   points.shrink_to_fit();
-  return points;
+  out.colours.shrink_to_fit();
+  return out;
 }
 
 // The discs of a scan at t (ScanLayout::Discs), or null.
 std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::Isometry3f& t, double voxel_m,
                                                    const CancelToken& cancel) {
   if (s.list_points.empty() && s.single_viewpoint) return nullptr;
-  const std::vector<Eigen::Vector3f> points = DiscPoints(s, t, voxel_m);
+  const DiscSource source = DiscPoints(s, t, voxel_m);
+  const std::vector<Eigen::Vector3f>& points = source.points;
   const Eigen::Vector3f eye = t.translation();
   const PointNormals normals = EstimatePointNormals(points, s.single_viewpoint ? &eye : nullptr, eye, 12, cancel);
   if (cancel.IsCancelled() || !(normals.spacing > 0.0f)) return nullptr;
@@ -142,6 +167,7 @@ std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::I
     if (normals.normal[i].isZero()) continue;
     discs->points.push_back(points[i]);
     discs->normals.push_back(normals.normal[i]);
+    if (!source.colours.empty()) discs->colours.push_back(source.colours[i]);
     discs->box.extend(points[i]);
   }
   return discs;
@@ -212,11 +238,13 @@ Scan CropScan(const Scan& scan, int r0, int r1, int c0, int c1) {
   out.points.resize(n);
   out.reflectance.resize(n);
   out.valid.resize(n);
+  if (scan.HasColour()) out.colour.resize(n);  // the listed points are the layout's discs, not the piece's
   for (int r = r0; r < r1; ++r) {
     const std::size_t from = scan.Index(r, c0), to = std::size_t(r - r0) * out.cols;
     std::copy_n(scan.points.begin() + from, out.cols, out.points.begin() + to);
     std::copy_n(scan.reflectance.begin() + from, out.cols, out.reflectance.begin() + to);
     std::copy_n(scan.valid.begin() + from, out.cols, out.valid.begin() + to);
+    if (scan.HasColour()) std::copy_n(scan.colour.begin() + from, out.cols, out.colour.begin() + to);
   }
   if (!scan.angles.empty()) {
     out.angles.azimuth.assign(scan.angles.azimuth.begin() + c0, scan.angles.azimuth.begin() + c1);
@@ -321,6 +349,11 @@ Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, c
     out.viewpoint.push_back(s.single_viewpoint);
     out.disc_radius.push_back(layout.discs ? layout.discs->radius : 0.0f);
     out.scan_begin.push_back(out.points.size());
+    // Colour per point once any piece has it (the points before it black, their scan not coloured).
+    const bool coloured = !s.colour.empty() || (layout.discs && !layout.discs->colours.empty());
+    out.coloured.push_back(coloured);
+    const bool keep_colour = std::any_of(out.coloured.begin(), out.coloured.end(), [](char c) { return c != 0; });
+    if (keep_colour) out.colour.resize(out.points.size(), Rgb{0, 0, 0});
     out.views.push_back(MakeView(s, t));
     if (layout.discs) {
       const ScanLayout::Discs& discs = *layout.discs;
@@ -328,6 +361,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, c
         if (keep && !keep->contains(discs.points[k])) continue;
         const int v = int(out.points.size());
         out.points.push_back(discs.points[k]);
+        if (keep_colour) out.colour.push_back(discs.colours.empty() ? Rgb{0, 0, 0} : discs.colours[k]);
         out.patches.push_back({{v, v, v}, discs.normals[k], int(si)});
       }
       out.max_patch_radius = std::max(out.max_patch_radius, double(discs.radius));
@@ -375,6 +409,7 @@ Expected<RangePatches> BuildRangePatches(const std::vector<ScanPiece>& pieces, c
         id[i] = int(out.points.size());
         touched.push_back(i);
         out.points.push_back(p);
+        if (keep_colour) out.colour.push_back(s.colour.empty() ? Rgb{0, 0, 0} : s.colour[i]);
       });
     }
     auto add = [&](int a, int b, int c) {

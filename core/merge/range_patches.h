@@ -52,6 +52,10 @@ struct RangePatches {
   // along lines of sight from a scanner it does not have.
   std::vector<char> viewpoint;
   std::vector<float> disc_radius;  // per scan: radius of its discs (0: none)
+  // Per point its colour, once a scan with colour has come (empty before and without); `coloured`
+  // per scan: 1 when its points' colours are the scanner's (0: black, no colour).
+  std::vector<Rgb> colour;
+  std::vector<char> coloured;
   double max_patch_radius = 0.0;         // metres: largest centroid-to-vertex distance
 
   // Indices of the patches that may lie within radius_m of x (bounding-sphere test), each once.
@@ -99,6 +103,7 @@ struct ScanLayout {
   struct Discs {
     std::vector<Eigen::Vector3f> points;  // relative to the origin
     std::vector<Eigen::Vector3f> normals;
+    std::vector<Rgb> colours;  // per point when the scan has colour (a cube's mean)
     float radius = 0.0f;
     Eigen::AlignedBox3f box;
   };

@@ -197,8 +197,11 @@ Status WritePoints(const std::filesystem::path& path, const merge::MeshSource& m
     io::LasCloud cloud;
     cloud.points.reserve(mesh.vertex_count());
     const Eigen::Vector3d origin = mesh.origin();
-    if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v) {
+    const bool coloured = mesh.coloured();
+    if (coloured) cloud.rgb.reserve(mesh.vertex_count());
+    if (Status s = mesh.ForEachVertex([&](const Eigen::Vector3f& v, const merge::VertexInfo& info) {
           cloud.points.push_back(origin + v.cast<double>());
+          if (coloured) cloud.rgb.push_back(info.colour);
           return Status::Ok();
         });
         !s)
