@@ -61,20 +61,24 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     const Eigen::Vector3f& a = patches.points[p.v[0]];
     const Eigen::Vector3f& b = patches.points[p.v[1]];
     const Eigen::Vector3f& c = patches.points[p.v[2]];
-    const Eigen::Vector3f closest = patches.Closest(id, x);
-    const float d = (closest - x).norm();
-    if (d < d_min) d_min = d, nearest_normal = p.normal;
-    if (options.fill_holes && d <= band) {  // x over the patch: its closest point is x's projection
-      const Eigen::Vector3f off = x - closest;
-      const float across = off.dot(p.normal);
-      if (off.squaredNorm() - across * across <= on_patch2) {
-        const float cos_phi = patches.SightCosine(p, closest, p.normal);
-        const double w = 1.0 / (sigma2 * cos_phi * cos_phi);
-        over_d = std::min(over_d, d), over_sum += w * across, over_w += w;
-      }
-    }
     const Eigen::Vector3f centre = (a + b + c) / 3.0f;
     const Eigen::Vector3f to_x = x - centre;
+    // The patch's nearest point only where it may be nearer than the nearest so far (its bounding
+    // sphere's): the same d_min and nearest normal, without most of the closest-point tests.
+    if (options.fill_holes || to_x.norm() - patches.radius[id] < d_min + 1e-6f) {
+      const Eigen::Vector3f closest = patches.Closest(id, x);
+      const float d = (closest - x).norm();
+      if (d < d_min) d_min = d, nearest_normal = p.normal;
+      if (options.fill_holes && d <= band) {  // x over the patch: its closest point is x's projection
+        const Eigen::Vector3f off = x - closest;
+        const float across = off.dot(p.normal);
+        if (off.squaredNorm() - across * across <= on_patch2) {
+          const float cos_phi = patches.SightCosine(p, closest, p.normal);
+          const double w = 1.0 / (sigma2 * cos_phi * cos_phi);
+          over_d = std::min(over_d, d), over_sum += w * across, over_w += w;
+        }
+      }
+    }
     const float s = to_x.dot(p.normal);  // > 0: x in front of the patch (its normal faces its scanner)
     if (std::abs(s) > band) continue;
     const float t2 = std::max(0.0f, to_x.squaredNorm() - s * s);  // along the surface, from its centre
