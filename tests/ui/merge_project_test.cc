@@ -70,6 +70,35 @@ scanreg::merge::MergeOptions QuickMerge() {
   return options;
 }
 
+// A colour from a point's position, so that every drawn point can be checked on its own.
+std::array<int, 3> ColourAt(double x, double y, double z) {
+  const long k = std::lround(x * 1000) * 7 + std::lround(y * 1000) * 13 + std::lround(z * 1000) * 3;
+  return std::array<int, 3>{int(k % 251), int((k / 3) % 256), int((k / 7) % 253)};
+}
+
+// A Leica-style PTX of 30 x 20 "x y z i [r g b]" lines 4 - 4.5 m in front of a scanner at (x0, 0, 0)
+// (identity header pose, the points shifted), coloured by ColourAt; its path, empty on failure.
+QString WriteTestPtx(const QTemporaryDir& dir, const QString& name, bool coloured, double x0) {
+  QFile f(dir.filePath(name));
+  if (!f.open(QIODevice::WriteOnly)) return QString();
+  QTextStream out(&f);
+  out << "30\n20\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";  // identity pose
+  for (int c = 0; c < 30; ++c) {
+    for (int r = 0; r < 20; ++r) {
+      const double az = (c - 15) * 0.02, el = (r - 10) * 0.02, range = 4.0 + 0.05 * ((r * 7 + c * 3) % 11);
+      const double x = x0 + range * std::cos(el) * std::cos(az), y = range * std::cos(el) * std::sin(az),
+                   z = range * std::sin(el);
+      out << QString::asprintf("%.3f %.3f %.3f %.3f", x, y, z, 0.1 + 0.8 * ((r + c) % 10) / 9.0);
+      if (coloured) {
+        const auto rgb = ColourAt(std::round(x * 1000) / 1000, std::round(y * 1000) / 1000, std::round(z * 1000) / 1000);
+        out << QString::asprintf(" %d %d %d", rgb[0], rgb[1], rgb[2]);
+      }
+      out << "\n";
+    }
+  }
+  return f.fileName();
+}
+
 vtkSmartPointer<vtkPolyData> ReadMesh(const QString& path) {
   const std::string file = path.toStdString();
   vtkSmartPointer<vtkPolyDataAlgorithm> reader;
@@ -503,33 +532,7 @@ class MergeProjectTest : public QObject {
   // reflectance, and the status bar says how many scans have colour. The choice is remembered.
   void ScannerColourIsDrawnAndScansWithoutColourAreGrey() {
     QTemporaryDir dir;
-    // A colour from the point's position, so that every drawn point can be checked on its own.
-    const auto colour_at = [](double x, double y, double z) {
-      const long k = std::lround(x * 1000) * 7 + std::lround(y * 1000) * 13 + std::lround(z * 1000) * 3;
-      return std::array<int, 3>{int(k % 251), int((k / 3) % 256), int((k / 7) % 253)};
-    };
-    const auto write_ptx = [&](const QString& name, bool coloured, double x0) {
-      QFile f(dir.filePath(name));
-      if (!f.open(QIODevice::WriteOnly)) return QString();
-      QTextStream out(&f);
-      out << "30\n20\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";  // identity pose
-      for (int c = 0; c < 30; ++c) {
-        for (int r = 0; r < 20; ++r) {
-          const double az = (c - 15) * 0.02, el = (r - 10) * 0.02, range = 4.0 + 0.05 * ((r * 7 + c * 3) % 11);
-          const double x = x0 + range * std::cos(el) * std::cos(az), y = range * std::cos(el) * std::sin(az),
-                       z = range * std::sin(el);
-          out << QString::asprintf("%.3f %.3f %.3f %.3f", x, y, z, 0.1 + 0.8 * ((r + c) % 10) / 9.0);
-          if (coloured) {
-            const auto rgb = colour_at(std::round(x * 1000) / 1000, std::round(y * 1000) / 1000,
-                                       std::round(z * 1000) / 1000);
-            out << QString::asprintf(" %d %d %d", rgb[0], rgb[1], rgb[2]);
-          }
-          out << "\n";
-        }
-      }
-      return f.fileName();
-    };
-    const QString coloured = write_ptx("camera.ptx", true, 0.0), grey = write_ptx("plain.ptx", false, 0.5);
+    const QString coloured = WriteTestPtx(dir, "camera.ptx", true, 0.0), grey = WriteTestPtx(dir, "plain.ptx", false, 0.5);
     QVERIFY(!coloured.isEmpty() && !grey.isEmpty());
     MainWindow window;
     window.show();
@@ -562,7 +565,7 @@ class MergeProjectTest : public QObject {
     QCOMPARE(plain.size(), window.previews()[1].scan.CountPoints());
     int wrong = 0, coloured_points = 0;
     for (const auto& [p, rgb] : camera) {
-      const auto want = colour_at(std::round(p.x() * 1000) / 1000, std::round(p.y() * 1000) / 1000,
+      const auto want = ColourAt(std::round(p.x() * 1000) / 1000, std::round(p.y() * 1000) / 1000,
                                   std::round(p.z() * 1000) / 1000);
       wrong += rgb != want;
       coloured_points += rgb[0] != rgb[1] || rgb[1] != rgb[2];
@@ -584,6 +587,49 @@ class MergeProjectTest : public QObject {
     QVERIFY(next.findChild<QAction*>("ColourByScannerColour")->isChecked());
     QVERIFY(next.scene()->colouring() == scanreg::ui::CloudColouring::kScannerColour);
     next.findChild<QAction*>("ColourPerScan")->setChecked(true);  // the other tests start per scan
+  }
+
+  // The merged mesh is drawn in the scanners' colour under View -> Colour points by -> Scanner
+  // colour: every vertex takes the colour of a point of the coloured PTX (one scan: registered at
+  // its file's pose); the summary says so, and how much of the surface was interpolated; per scan,
+  // the mesh is plaster grey.
+  void MergedMeshIsDrawnInTheScannersColour() {
+    QTemporaryDir dir;
+    const QString coloured = WriteTestPtx(dir, "camera.ptx", true, 0.0);
+    QVERIFY(!coloured.isEmpty());
+    MainWindow window;
+    window.show();
+    QVERIFY(window.NewProject({coloured}, dir.filePath("m.scanreg.json")));
+    QVERIFY(WaitForJob(window, 120000));
+    window.findChild<QAction*>("ColourByScannerColour")->setChecked(true);
+    std::set<std::array<int, 3>> camera_colours;
+    const scanreg::Scan& scan = window.previews()[0].scan;
+    for (std::size_t i = 0; i < scan.size(); ++i)
+      if (scan.valid[i]) camera_colours.insert({scan.colour[i][0], scan.colour[i][1], scan.colour[i][2]});
+    QVERIFY(camera_colours.size() > 100);
+    scanreg::merge::MergeOptions merge_options = QuickMerge();
+    merge_options.voxel_m = 0.05;
+    window.mergePanel()->SetOptions(merge_options);
+    QVERIFY(window.mergePanel()->Run());
+    QVERIFY(WaitForJob(window, 120000));
+    QVERIFY(window.mergePanel()->mesh() != nullptr && window.mergePanel()->mesh()->coloured());
+    const QString summary = window.mergePanel()->findChild<QLabel*>("MergeSummary")->text();
+    QVERIFY2(summary.contains("scanners' colour") && summary.contains("interpolated"), qPrintable(summary));
+    const auto mesh_colours = [&]() -> vtkDataArray* {
+      auto* poly = vtkPolyData::SafeDownCast(window.scene()->MeshActor()->GetMapper()->GetInput());
+      return window.scene()->MeshActor()->GetMapper()->GetScalarVisibility() ? poly->GetPointData()->GetScalars()
+                                                                              : nullptr;
+    };
+    vtkDataArray* vertex_rgb = mesh_colours();
+    QVERIFY(vertex_rgb != nullptr && vertex_rgb->GetNumberOfTuples() > 20);
+    int from_camera = 0;
+    for (vtkIdType i = 0; i < vertex_rgb->GetNumberOfTuples(); ++i) {
+      from_camera += camera_colours.count({int(vertex_rgb->GetComponent(i, 0)), int(vertex_rgb->GetComponent(i, 1)),
+                                           int(vertex_rgb->GetComponent(i, 2))});
+    }
+    QCOMPARE(from_camera, int(vertex_rgb->GetNumberOfTuples()));
+    window.findChild<QAction*>("ColourPerScan")->setChecked(true);  // the other tests start per scan
+    QVERIFY(mesh_colours() == nullptr);
   }
 
   void DecimatedByDefaultFullResolutionOnDemand() {
