@@ -86,8 +86,7 @@ Status MeshSpill::Append(Mesh& piece) {
   const std::size_t first = vertices_;
   if (first + piece.vertices.size() >= 0x7FFFFFFFu)  // ids are int, and the pieces' marks need the top bit
     return MakeError(ErrorCode::kInvalidArgument, "merge: the mesh has more than 2 billion vertices; use a larger voxel");
-  if (first == 0) described_ = !piece.info.empty(), coloured_ = piece.coloured;
-  described_ = described_ && piece.info.size() == piece.vertices.size();
+  undescribed_ = undescribed_ || piece.info.size() != piece.vertices.size();
   coloured_ = coloured_ || piece.coloured;
   std::vector<SpilledVertex> records(piece.vertices.size());
   for (std::size_t i = 0; i < records.size(); ++i) {

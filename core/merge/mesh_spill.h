@@ -38,8 +38,8 @@ class MeshSpill : public MeshSource {
   Eigen::Vector3d origin() const override { return origin_; }
   std::size_t vertex_count() const override { return kept_vertices_; }
   std::size_t triangle_count() const override { return kept_triangles_; }
-  bool described() const override { return described_; }
-  bool coloured() const override { return described_ && coloured_; }
+  bool described() const override { return vertices_ > 0 && !undescribed_; }
+  bool coloured() const override { return described() && coloured_; }
   Status ForEachVertex(const VertexVisitor& f) const override;
   Status ForEachTriangle(const std::function<Status(const Eigen::Vector3i&)>& f) const override;
 
@@ -56,7 +56,8 @@ class MeshSpill : public MeshSource {
   std::size_t kept_vertices_ = 0, kept_triangles_ = 0;  // after RemoveSmallPieces
   std::vector<std::uint32_t> parent_;  // union-find over vertices; after RemoveSmallPieces: new ids
   bool renumbered_ = false;
-  bool described_ = false, coloured_ = false;  // every piece appended was (described: the first one)
+  bool undescribed_ = false;  // a piece came without VertexInfo for each vertex
+  bool coloured_ = false;     // a piece came coloured
 };
 
 }  // namespace scanreg::merge

@@ -91,6 +91,37 @@ TEST(MeshSpill, ASpilledMeshIsWrittenAsTheMeshInMemory) {  // TSDF: the method d
   EXPECT_NE(nowhere.error().message.find("no/such/folder"), std::string::npos) << nowhere.error().message;
 }
 
+// A tiled merge's first tiles may mesh nothing: the vertices that come later keep their colour and
+// gap (VertexInfo) on the way through the spill.
+TEST(MeshSpill, VerticesKeepWhatTheMeasurementsSayAfterEmptyPieces) {
+  test::TempDir dir;
+  auto spill = MeshSpill::Create(dir.path());
+  ASSERT_TRUE(spill) << spill.error().ToString();
+  Mesh empty;
+  ASSERT_TRUE((*spill)->Append(empty));
+  Mesh piece;
+  piece.vertices = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 1, 0)};
+  piece.triangles = {Eigen::Vector3i(0, 1, 2)};
+  piece.info = {{{10, 20, 30}, 0.001f}, {{40, 50, 60}, 0.002f}, {{70, 80, 90}, 0.5f}};
+  piece.coloured = true;
+  ASSERT_TRUE((*spill)->Append(piece));
+  EXPECT_TRUE((*spill)->described());
+  EXPECT_TRUE((*spill)->coloured());
+  std::vector<VertexInfo> read;
+  ASSERT_TRUE((*spill)->ForEachVertex([&](const Eigen::Vector3f&, const VertexInfo& info) {
+    read.push_back(info);
+    return Status::Ok();
+  }));
+  ASSERT_EQ(read.size(), 3u);
+  EXPECT_EQ(read[1].colour, (Rgb{40, 50, 60}));
+  EXPECT_FLOAT_EQ(read[2].gap_m, 0.5f);
+  Mesh undescribed;  // a piece without VertexInfo: the spill no longer claims any
+  undescribed.vertices = {Eigen::Vector3f(2, 0, 0)};
+  ASSERT_TRUE((*spill)->Append(undescribed));
+  EXPECT_FALSE((*spill)->described());
+  EXPECT_FALSE((*spill)->coloured());
+}
+
 TEST_P(SphereMerge, WatertightAndBelowInputNoise) {
   const Eigen::Vector3d c(10.3, -4.2, 1.7);
   const double r = 0.5, sigma = 0.01;
