@@ -77,7 +77,7 @@ Status WriteWorldVertices(const MeshSource& mesh, ChunkedOutput& output) {
   });
 }
 
-const char* kQualityComment =
+const char* kGapComment =
     "comment scalar_gap: metres from the vertex to the nearest scan point (beyond 1.5 voxels: surface the merge "
     "interpolated, not measured)\n";
 
@@ -106,7 +106,7 @@ Status WriteMeshPly(const std::filesystem::path& path, const MeshSource& mesh) {
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged mesh, world coordinates (metres)\n";
-  if (mesh.described()) out += kQualityComment;
+  if (mesh.described()) out += kGapComment;
   out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + VertexProperties(mesh);
   out += "element face " + std::to_string(mesh.triangle_count()) +
          "\nproperty list uchar int vertex_indices\nend_header\n";
@@ -213,7 +213,7 @@ Status WritePointCloudPly(const std::filesystem::path& path, const MeshSource& m
   if (Status s = output.Open(); !s) return s;
   std::string& out = output.bytes();
   out = "ply\nformat binary_little_endian 1.0\ncomment scanreg merged points, world coordinates (metres)\n";
-  if (mesh.described()) out += kQualityComment;
+  if (mesh.described()) out += kGapComment;
   out += "element vertex " + std::to_string(mesh.vertex_count()) + "\n" + VertexProperties(mesh) + "end_header\n";
   if (Status s = WriteWorldVertices(mesh, output); !s) return s;
   return output.Commit();
