@@ -124,26 +124,31 @@ CloudProjection::CloudProjection(const std::vector<Eigen::Vector3f>& points)
 }
 
 Expected<std::size_t> CloudProjection::CountKept(const OrganizeOptions& options) const {
-  return Place(options, {}, {}, "cloud", nullptr);
+  return Place(options, {}, {}, {}, "cloud", nullptr);
 }
 
 Expected<Scan> CloudProjection::Organize(const std::vector<float>& reflectance, const OrganizeOptions& options,
-                                         std::string name, const std::vector<Rgb>& colour) const {
+                                         std::string name, const std::vector<Rgb>& colour,
+                                         const std::vector<double>& time) const {
   Scan scan;
-  Expected<std::size_t> kept = Place(options, reflectance, colour, std::move(name), &scan);
+  Expected<std::size_t> kept = Place(options, reflectance, colour, time, std::move(name), &scan);
   if (!kept) return kept.error();
   scan.grid_from_file = false;  // built here from a list of points
   return scan;
 }
 
 Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, const std::vector<float>& reflectance,
-                                             const std::vector<Rgb>& colour, std::string name, Scan* out) const {
+                                             const std::vector<Rgb>& colour, const std::vector<double>& time,
+                                             std::string name, Scan* out) const {
   if (Status s = options.Validate(); !s) return s.error();
   if (out && !reflectance.empty() && reflectance.size() != points_->size()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': reflectance and point counts differ");
   }
   if (out && !colour.empty() && colour.size() != points_->size()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': colour and point counts differ");
+  }
+  if (out && !time.empty() && time.size() != points_->size()) {
+    return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': time and point counts differ");
   }
   const bool rings = !options.row_elevations_rad.empty();
   double el_min = options.elevation_min_rad, el_max = options.elevation_max_rad;
@@ -172,6 +177,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
     for (int r = 0; r < rows; ++r)
       out->angles.elevation[r] = float(rings ? options.row_elevations_rad[r] : el_max - r * el_step);
     if (!colour.empty()) out->AddColour();
+    if (!time.empty()) out->AddTime();
   }
 
   // Ring rows: a point belongs to the ring whose elevation is nearest, i.e. between the midpoints.
@@ -234,6 +240,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
       const std::uint32_t i = pl.point->index;
       out->Set(r, pl.col, (*points_)[i], reflectance.empty() ? 0.5f : reflectance[i]);
       if (!colour.empty()) out->colour[out->Index(r, pl.col)] = colour[i];
+      if (!time.empty()) out->time[out->Index(r, pl.col)] = time[i];
       in_grid[i] = 1;
     }
   }
@@ -245,17 +252,19 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
       out->list_points.push_back((*points_)[i]);
       out->list_reflectance.push_back(reflectance.empty() ? 0.5f : reflectance[i]);
       if (!colour.empty()) out->list_colour.push_back(colour[i]);
+      if (!time.empty()) out->list_time.push_back(time[i]);
     }
   }
   return kept;
 }
 
 Expected<Scan> OrganizeCloud(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
-                             const OrganizeOptions& options, std::string name, const std::vector<Rgb>& colour) {
+                             const OrganizeOptions& options, std::string name, const std::vector<Rgb>& colour,
+                             const std::vector<double>& time) {
   if (points.size() > std::numeric_limits<std::uint32_t>::max()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': more than 2^32 points");
   }
-  return CloudProjection(points).Organize(reflectance, options, std::move(name), colour);
+  return CloudProjection(points).Organize(reflectance, options, std::move(name), colour, time);
 }
 
 }  // namespace scanreg

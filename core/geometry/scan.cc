@@ -34,11 +34,17 @@ void Scan::Clear(int row, int col) {
   reflectance[i] = 0.0f;
   valid[i] = 0;
   if (HasColour()) colour[i] = Rgb{0, 0, 0};
+  if (HasTime()) time[i] = 0.0;
 }
 
 void Scan::AddColour() {
   colour.assign(points.size(), Rgb{0, 0, 0});
   list_colour.assign(list_points.size(), Rgb{0, 0, 0});
+}
+
+void Scan::AddTime() {
+  time.assign(points.size(), 0.0);
+  list_time.assign(list_points.size(), 0.0);
 }
 
 std::size_t Scan::CountValid() const {
@@ -71,18 +77,23 @@ Status Scan::Validate() const {
   if (HasColour() && (colour.size() != n || list_colour.size() != list_points.size())) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its colours and points differ in number");
   }
+  if (HasTime() && (time.size() != n || list_time.size() != list_points.size())) {
+    return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its times and points differ in number");
+  }
   if (list_reflectance.size() != list_points.size()) {
     return MakeError(ErrorCode::kInvalidArgument,
                      "scan '" + name + "': its listed points and their reflectance differ in number");
   }
   for (std::size_t i = 0; i < list_points.size(); ++i) {
-    if (!list_points[i].allFinite() || !std::isfinite(list_reflectance[i])) {
+    if (!list_points[i].allFinite() || !std::isfinite(list_reflectance[i]) ||
+        (!list_time.empty() && !std::isfinite(list_time[i]))) {
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': listed point " + std::to_string(i + 1) +
                                                         " (off the grid) holds a NaN or infinite value");
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (valid[i] && (!points[i].allFinite() || !std::isfinite(reflectance[i]))) {
+    if (valid[i] && (!points[i].allFinite() || !std::isfinite(reflectance[i]) ||
+                     (!time.empty() && !std::isfinite(time[i])))) {
       return MakeError(ErrorCode::kInvalidArgument,
                        "scan '" + name + "': cell " + std::to_string(i / cols) + "," + std::to_string(i % cols) +
                            " holds a NaN or infinite value");

@@ -30,7 +30,7 @@ using Rgb = std::array<std::uint8_t, 3>;
 // A colour from channels already on the 0..255 scale: rounded, clamped, and 0 where a channel is not finite.
 Rgb ToRgb(double red, double green, double blue);
 
-// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), and 3 more with colour. Points stay local to the
+// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), 3 more with colour, 8 more with time. Points stay local to the
 // scanner (float is plenty within a few km); the pose is double, so UTM-sized coordinates keep
 // their precision.
 struct Scan {
@@ -56,6 +56,12 @@ struct Scan {
   // then one per cell (empty cells black) and one per listed point; both empty otherwise.
   std::vector<Rgb> colour;
   std::vector<Rgb> list_colour;
+  // Time of each return where the file gave one (LAS GPS time, PLY gps_time / time / timestamp, E57
+  // timeStamp), in seconds of the file's own time base (time_base): then one per cell (empty cells 0)
+  // and one per listed point; both empty otherwise. Kept and exported, never used to move a point.
+  std::vector<double> time;
+  std::vector<double> list_time;
+  std::string time_base;  // what the times count from, as the file said ("" when it did not)
   // The grid's points were all seen from the scanner origin. False for a cloud seen from several
   // places: its grid is only an index, and no evidence is drawn from free space "seen" from it.
   bool single_viewpoint = true;
@@ -74,6 +80,9 @@ struct Scan {
   bool HasColour() const { return !colour.empty() || !list_colour.empty(); }
   // Gives the scan colour: every cell and listed point black until set.
   void AddColour();
+  bool HasTime() const { return !time.empty() || !list_time.empty(); }
+  // Gives the scan times: every cell and listed point 0 until set.
+  void AddTime();
 
   std::size_t CountValid() const;  // the grid's points
   std::size_t CountPoints() const { return CountValid() + list_points.size(); }  // every point

@@ -86,6 +86,7 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
                                                   std::to_string(out.version_minor) + " (supported: 1.0 to 1.4)");
   }
   out.generating_software = Trimmed(h, 58, 32);
+  out.global_encoding = Get<std::uint16_t>(h, 6);
   const int header_size = Get<std::uint16_t>(h, 94);
   const std::uint32_t point_offset = Get<std::uint32_t>(h, 96);
   const int format_byte = static_cast<unsigned char>(h[104]);
@@ -196,7 +197,13 @@ Expected<LasPoints> ReadLasPoints(const std::filesystem::path& path, ProgressSin
                    "header's scale factors are damaged");
       }
       out.intensity[first + k] = Get<std::uint16_t>(buffer, at + 12);
-      if (gps_at >= 0) out.gps_time[first + k] = Get<double>(buffer, at + gps_at);
+      if (gps_at >= 0) {
+        out.gps_time[first + k] = Get<double>(buffer, at + gps_at);
+        if (!std::isfinite(out.gps_time[first + k])) {
+          return bad("point " + std::to_string(first + k) + " has a GPS time that is not a finite number; the "
+                     "record is damaged");
+        }
+      }
       if (rgb_at >= 0)
         for (int c = 0; c < 3; ++c) out.rgb[first + k][c] = Get<std::uint16_t>(buffer, at + rgb_at + 2 * c);
     }
@@ -237,8 +244,10 @@ Expected<Scan> ReadLas(const std::filesystem::path& path, ProgressSink& progress
   for (std::size_t k = 0; k < colour.size(); ++k)
     for (int c = 0; c < 3; ++c) colour[k][c] = static_cast<std::uint8_t>(las->rgb[k][c] >> shift);
   las->rgb = {};
-  Expected<Scan> scan = OrganizeCloudByDensity(points, reflectance, path.stem().string(), path.string(), colour);
+  Expected<Scan> scan =
+      OrganizeCloudByDensity(points, reflectance, path.stem().string(), path.string(), colour, las->gps_time);
   if (!scan) return scan.error();
+  if (scan->HasTime()) scan->time_base = (las->global_encoding & 1u) ? kAdjustedGpsTime : kGpsWeekSeconds;
   scan->world_from_scan = Eigen::Isometry3d(Eigen::Translation3d(centre));
   return scan;
 }

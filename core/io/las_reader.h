@@ -36,10 +36,16 @@ struct LasPoints {
   // Per point where the format has them (empty otherwise), as stored: GPS time (formats 1 and 3-10;
   // GPS week seconds or adjusted standard GPS time, as the header's global encoding says) and red,
   // green, blue (formats 2, 3, 5, 7, 8, 10; 16 bits a channel). A Scan keeps the colour (8 bits a
-  // channel: the high byte, or the value itself when no channel exceeds 255), not the time.
+  // channel: the high byte, or the value itself when no channel exceeds 255) and the time, with its
+  // base (Scan::time_base: kGpsWeekSeconds or kAdjustedGpsTime).
   std::vector<double> gps_time;
+  std::uint16_t global_encoding = 0;  // bit 0: the GPS times are adjusted standard GPS time
   std::vector<std::array<std::uint16_t, 3>> rgb;
 };
+
+// Scan::time_base of times read from LAS, by the header's global encoding bit 0 (LAS 1.4 R15, table 4).
+inline constexpr const char* kGpsWeekSeconds = "GPS week seconds";
+inline constexpr const char* kAdjustedGpsTime = "adjusted standard GPS time (GPS seconds - 1e9)";
 
 // The minimum record length of a point data format (0-10); 0 for an unknown format.
 int LasMinimumRecordLength(int point_format);

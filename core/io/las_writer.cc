@@ -20,6 +20,7 @@ constexpr double kStepsPerMetre = 10000.0;      // 1 / kScale, exact
 constexpr std::uint16_t kHeaderSize = 375;      // LAS 1.4 public header block
 constexpr std::uint32_t kVlrHeaderSize = 54;    // reserved, user ID, record ID, length, description
 constexpr std::size_t kMaxVlrPayload = 65535;   // "Record Length After Header" is an unsigned short
+constexpr std::uint16_t kAdjustedGpsBit = 1u;  // global encoding: GPS times are adjusted standard GPS time
 constexpr std::uint16_t kWktBit = 1u << 4;      // global encoding: CRS (if any) is WKT; required for PDRF 6-10
 constexpr std::uint8_t kReturnOneOfOne = 0x11;  // return number (bits 0-3) = 1, number of returns (bits 4-7) = 1
 constexpr std::size_t kPointsPerChunk = 1 << 16;
@@ -59,6 +60,10 @@ Status CheckSizes(const std::filesystem::path& path, const LasCloud& cloud) {
   };
   if (Status s = check(cloud.reflectance.size(), "reflectance values"); !s) return s;
   if (Status s = check(cloud.rgb.size(), "colours"); !s) return s;
+  if (Status s = check(cloud.gps_time.size(), "GPS times"); !s) return s;
+  for (std::size_t i = 0; i < cloud.gps_time.size(); ++i)
+    if (!std::isfinite(cloud.gps_time[i]))
+      return Invalid(path, "point " + std::to_string(i) + " has a GPS time that is not a finite number");
   return check(cloud.source_ids.size(), "source IDs");
 }
 
@@ -135,7 +140,7 @@ std::string HeaderBlock(const LasCloud& cloud, const Grid& grid, std::uint32_t p
   out.reserve(kHeaderSize);
   out += "LASF";
   PutLe<std::uint16_t>(out, 0);        // file source ID: unassigned (an aggregate of scans)
-  PutLe<std::uint16_t>(out, kWktBit);  // global encoding
+  PutLe<std::uint16_t>(out, kWktBit | (cloud.adjusted_gps_time ? kAdjustedGpsBit : 0));  // global encoding
   out.append(16, '\0');                // project ID (GUID): unused
   PutU8(out, 1);                       // version 1.4
   PutU8(out, 4);
@@ -191,7 +196,7 @@ void PutPoint(std::string& out, const LasCloud& cloud, const Grid& grid, std::si
   PutU8(out, 0);                 // user data
   PutLe<std::uint16_t>(out, 0);  // scan angle (int16, 0.006 deg steps): not recorded
   PutLe<std::uint16_t>(out, cloud.source_ids.empty() ? 0 : cloud.source_ids[i]);
-  PutF64(out, 0.0);  // GPS time: not recorded
+  PutF64(out, cloud.gps_time.empty() ? 0.0 : cloud.gps_time[i]);  // 0: not recorded
   if (!cloud.rgb.empty())
     for (std::uint8_t c : cloud.rgb[i]) PutLe<std::uint16_t>(out, static_cast<std::uint16_t>(c * 256));
 }

@@ -324,7 +324,8 @@ OrganizeOptions RingGridOptions(const std::vector<Eigen::Vector3f>& points) {
 }
 
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
-                                      std::string name, const std::string& source, const std::vector<Rgb>& colour) {
+                                      std::string name, const std::string& source, const std::vector<Rgb>& colour,
+                                      const std::vector<double>& time) {
   const std::vector<Direction> dirs = Directions(points);
   const double spacing = DensityStep(dirs);
   if (dirs.empty() || spacing <= 0.0) {
@@ -382,7 +383,7 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
     return MakeError(ErrorCode::kParseError, source + ": cannot organize the cloud into a scan grid within " +
                                                  std::to_string(int(kMaxCellsPerPoint)) + " cells per point");
   }
-  Expected<Scan> scan = projection.Organize(reflectance, *best, std::move(name), colour);
+  Expected<Scan> scan = projection.Organize(reflectance, *best, std::move(name), colour, time);
   if (!scan) return Failed(source, scan.error());
   const bool is_rings = !best->row_elevations_rad.empty();
   Log(LogLevel::kDebug, "organizing '" + source + "': " + Thousands(best_kept) + " of " + Thousands(usable) +

@@ -216,6 +216,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   std::vector<Eigen::Vector3f> points;
   std::vector<float> intensity;
   std::vector<Rgb> colour;
+  std::vector<double> time;
   std::vector<int> grid;  // vertex index per file cell, -1 = empty
   bool have_vertex = false, have_grid = false;
   long vertex_first_line = 0;
@@ -229,7 +230,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   for (const PlyElement& element : header->elements) {
     const bool is_vertex = element.name == "vertex";
     const bool is_grid = element.name == "range_grid";
-    int ix = -1, iy = -1, iz = -1, ii = -1, ic[3] = {-1, -1, -1};
+    int ix = -1, iy = -1, iz = -1, ii = -1, it = -1, ic[3] = {-1, -1, -1};
     if (is_vertex) {
       ix = element.FindProperty("x"), iy = element.FindProperty("y"), iz = element.FindProperty("z");
       if (ix < 0 || iy < 0 || iz < 0) {
@@ -238,9 +239,13 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       for (const char* name : {"intensity", "scalar_intensity", "reflectance", "confidence"})
         if (ii < 0) ii = element.FindProperty(name);
       ColourProperties(element, ic);
+      // Per-point time as scanreg, CloudCompare (a LAS's "GpsTime" scalar field) and PDAL name it.
+      for (const char* name : {"gps_time", "GpsTime", "scalar_GpsTime", "gpstime", "time", "timestamp", "scalar_time"})
+        if (it < 0) it = element.FindProperty(name);
       have_vertex = true;
       points.resize(element.count);
       if (ii >= 0) intensity.resize(element.count);
+      if (it >= 0) time.resize(element.count);
       if (ic[0] >= 0) colour.resize(element.count);
       vertex_first_line = header->body_line + long(done);
     }
@@ -256,7 +261,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     const double colour_scale = ic[0] >= 0 ? ColourScale(element.properties[ic[0]].type) : 1.0;
     double rgb[3] = {0, 0, 0};
     const std::string what = is_vertex ? "a vertex" : is_grid ? "a range_grid cell" : "element '" + element.name + "'";
-    double v[4] = {0, 0, 0, 0.5};
+    double v[4] = {0, 0, 0, 0.5}, t = 0;
     for (std::size_t k = 0; k < element.count; ++k, ++done) {
       if (done % report_every == 0) {
         if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, path.string() + ": cancelled");
@@ -302,6 +307,8 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
           v[2] = value;
         else if (p == ii)
           v[3] = value * scale;
+        else if (p == it)
+          t = value;
         else if (p == ic[0] || p == ic[1] || p == ic[2])
           rgb[p == ic[0] ? 0 : p == ic[1] ? 1 : 2] = value * colour_scale;
       }
@@ -309,13 +316,16 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       points[k] = (points_in_world ? scan_from_world * p : p).cast<float>();
       if (ii >= 0) intensity[k] = float(v[3]);
       if (ic[0] >= 0) colour[k] = ToRgb(rgb[0], rgb[1], rgb[2]);
+      if (it >= 0) time[k] = t;
     }
   }
   if (!have_vertex) return MakeError(ErrorCode::kUnsupported, path.string() + ": the PLY file has no vertex element");
 
   // NaN/inf are rejected where they would become valid cells.
   auto check_finite = [&](std::size_t k) -> Status {
-    if (points[k].allFinite() && (intensity.empty() || std::isfinite(intensity[k]))) return Status::Ok();
+    if (points[k].allFinite() && (intensity.empty() || std::isfinite(intensity[k])) &&
+        (time.empty() || std::isfinite(time[k])))
+      return Status::Ok();
     const std::string where =
         header->format == PlyFormat::kAscii ? AtLine(path, vertex_first_line + long(k)) : path.string() + ": ";
     return MakeError(ErrorCode::kParseError, where + "vertex " + std::to_string(k) +
@@ -336,6 +346,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     }
     scan = Scan(name, *rows, *cols);
     if (!colour.empty()) scan.AddColour();
+    if (!time.empty()) scan.AddTime();
     for (int fr = 0; fr < *rows; ++fr) {
       for (int c = 0; c < *cols; ++c) {
         const int k = grid[static_cast<std::size_t>(fr) * *cols + c];
@@ -344,6 +355,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         if (points[k].isZero()) continue;
         scan.Set(*rows - 1 - fr, c, points[k], intensity.empty() ? 0.5f : intensity[k]);
         if (!colour.empty()) scan.colour[scan.Index(*rows - 1 - fr, c)] = colour[k];
+        if (!time.empty()) scan.time[scan.Index(*rows - 1 - fr, c)] = time[k];
       }
     }
     // Vertices no cell takes (later returns of a cell, points without a cell) stay as a list.
@@ -353,19 +365,23 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     for (std::size_t k = 0; k < points.size(); ++k) {
       if (in_grid[k] || !points[k].allFinite() || points[k].isZero()) continue;
       if (!intensity.empty() && !std::isfinite(intensity[k])) continue;
+      if (!time.empty() && !std::isfinite(time[k])) continue;
       scan.list_points.push_back(points[k]);
       scan.list_reflectance.push_back(intensity.empty() ? 0.5f : intensity[k]);
       if (!colour.empty()) scan.list_colour.push_back(colour[k]);
+      if (!time.empty()) scan.list_time.push_back(time[k]);
     }
     if (header->obj_info.count("scanreg_angular_grid")) EstimateAngularGrid(scan);
   } else {
     for (std::size_t k = 0; k < points.size(); ++k)
       if (Status s = check_finite(k); !s) return s.error();
-    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string(), colour);
+    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string(), colour, time);
     if (!organized) return organized.error();
     scan = std::move(*organized);
   }
   scan.world_from_scan = world_from_scan;
+  if (auto base = header->obj_info.find("scanreg_time_base"); base != header->obj_info.end() && scan.HasTime())
+    scan.time_base = base->second;
   progress.Report(1.0, stage);
   return scan;
 }
@@ -398,9 +414,12 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   header += "\n";
   if (grid && !scan.angles.empty()) header += "obj_info scanreg_angular_grid 1\n";
   header += "obj_info scanreg_points_in_world 1\n";
+  if (scan.HasTime() && !scan.time_base.empty()) header += "obj_info scanreg_time_base " + scan.time_base + "\n";
   header += "element vertex " + std::to_string(n_valid + scan.list_points.size()) +
             "\nproperty double x\nproperty double y\nproperty double z\nproperty float intensity\n";
   if (scan.HasColour()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  // CloudCompare's name: its PLY import reads the time as the "GpsTime" scalar field its LAS import makes.
+  if (scan.HasTime()) header += "property double scalar_GpsTime\n";
   if (grid)
     header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";
@@ -424,6 +443,7 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
       chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
       chunk.append(reinterpret_cast<const char*>(&scan.reflectance[i]), sizeof(float));
       if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.colour[i].data()), 3);
+      if (scan.HasTime()) chunk.append(reinterpret_cast<const char*>(&scan.time[i]), sizeof(double));
       index[static_cast<std::size_t>(fr) * scan.cols + c] = next++;
     }
     if (chunk.size() > (1 << 20)) {
@@ -436,6 +456,7 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
     chunk.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
     chunk.append(reinterpret_cast<const char*>(&scan.list_reflectance[k]), sizeof(float));
     if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.list_colour[k].data()), 3);
+    if (scan.HasTime()) chunk.append(reinterpret_cast<const char*>(&scan.list_time[k]), sizeof(double));
     if (chunk.size() > (1 << 20)) {
       if (Status s = file.Write(chunk); !s) return s;
       chunk.clear();

@@ -16,7 +16,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
-constexpr std::uint32_t kVersion = 5;  // 3: grid_from_file; 4: list points, single_viewpoint; 5: colour
+constexpr std::uint32_t kVersion = 6;  // 3: grid_from_file; 4: list points, single_viewpoint; 5: colour; 6: time
 constexpr std::size_t kFixedHeader = 8 + 4 + 4 + 8;
 constexpr std::uint32_t kMaxScans = 1u << 20;
 // The header: the fixed part, n + 1 offsets, its checksum.
@@ -163,13 +163,21 @@ void PutRecord(std::string& out, const Scan& s) {
     PutBytes(out, s.colour.data(), s.colour.size() * sizeof(Rgb));
     PutBytes(out, s.list_colour.data(), s.list_colour.size() * sizeof(Rgb));
   }
+  Put(out, static_cast<std::uint8_t>(s.HasTime()));
+  if (s.HasTime()) {
+    Put(out, static_cast<std::uint32_t>(s.time_base.size()));
+    PutBytes(out, s.time_base.data(), s.time_base.size());
+    PutBytes(out, s.time.data(), s.time.size() * sizeof(double));
+    PutBytes(out, s.list_time.data(), s.list_time.size() * sizeof(double));
+  }
   Put(out, Checksum(out.data() + begin, out.size() - begin));
 }
 
 std::size_t RecordBytes(const Scan& s) {
   return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 1 + 4 +
          4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 1 + 8 + 16 * s.list_points.size() + 1 +
-         (s.HasColour() ? 3 * (s.size() + s.list_points.size()) : 0) + 8;
+         (s.HasColour() ? 3 * (s.size() + s.list_points.size()) : 0) + 1 +
+         (s.HasTime() ? 4 + s.time_base.size() + 8 * (s.size() + s.list_points.size()) : 0) + 8;
 }
 
 // The record in bytes [begin, end).
@@ -221,6 +229,16 @@ Expected<Scan> ParseRecord(const std::string& bytes, std::size_t begin, std::siz
     s.AddColour();
     r.Bytes(s.colour.data(), cells * sizeof(Rgb));
     r.Bytes(s.list_colour.data(), listed * sizeof(Rgb));
+  }
+  if (r.Get<std::uint8_t>() != 0) {
+    const std::uint32_t base_bytes = r.Get<std::uint32_t>();
+    if (!r.ok || base_bytes > 4096) return Bad("truncated or corrupt time base");
+    s.time_base.assign(base_bytes, '\0');
+    r.Bytes(s.time_base.data(), base_bytes);
+    if (!r.ok || (cells + listed) * sizeof(double) > end - r.pos) return Bad("truncated or corrupt times");
+    s.AddTime();
+    r.Bytes(s.time.data(), cells * sizeof(double));
+    r.Bytes(s.list_time.data(), listed * sizeof(double));
   }
   if (!r.ok) return Bad("truncated");
   if (r.pos != end - 8) return Bad("trailing bytes in a scan's record");

@@ -6,6 +6,7 @@
 
 #include "core/common/log.h"
 #include "core/common/output_set.h"
+#include "core/io/las_reader.h"
 #include "core/io/las_writer.h"
 #include "core/io/scan_file.h"
 #include "core/merge/mesh_io.h"
@@ -37,7 +38,7 @@ void ApplyPose(Scan& scan) {
 }
 
 // One scan as LAS: world coordinates (double), intensity from reflectance, colour when the scan has
-// one (point format 7), point source ID = the scan's number in the project (from 1: LAS reserves 0),
+// one (point format 7), each point's time when the scan has them, point source ID = the scan's number in the project (from 1: LAS reserves 0),
 // named in the file's VLR.
 Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::uint16_t source_id) {
   io::LasCloud cloud;
@@ -49,6 +50,12 @@ Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::ui
     for (std::size_t i = 0; i < scan.size(); ++i)
       if (scan.valid[i]) cloud.rgb.push_back(scan.colour[i]);
     cloud.rgb.insert(cloud.rgb.end(), scan.list_colour.begin(), scan.list_colour.end());
+  }
+  if (scan.HasTime()) {  // the same order
+    for (std::size_t i = 0; i < scan.size(); ++i)
+      if (scan.valid[i]) cloud.gps_time.push_back(scan.time[i]);
+    cloud.gps_time.insert(cloud.gps_time.end(), scan.list_time.begin(), scan.list_time.end());
+    cloud.adjusted_gps_time = scan.time_base == io::kAdjustedGpsTime;
   }
   cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
   cloud.source_names.assign(source_id + 1, "");

@@ -15,7 +15,8 @@ std::size_t ScanBytes(const Scan& scan) {
   return scan.points.capacity() * sizeof(Eigen::Vector3f) + scan.reflectance.capacity() * sizeof(float) +
          scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float) +
          scan.list_points.capacity() * sizeof(Eigen::Vector3f) + scan.list_reflectance.capacity() * sizeof(float) +
-         (scan.colour.capacity() + scan.list_colour.capacity()) * sizeof(Rgb);
+         (scan.colour.capacity() + scan.list_colour.capacity()) * sizeof(Rgb) +
+         (scan.time.capacity() + scan.list_time.capacity()) * sizeof(double);
 }
 
 std::size_t DefaultMemoryBudget() {
