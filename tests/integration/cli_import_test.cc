@@ -165,5 +165,26 @@ TEST(CliImport, RegisterOnImportedPosesNeverCallsAWrongScanRegistered) {
   }
 }
 
+// A time per point is kept where the format can hold it and the user is told where it cannot:
+// `convert` of TerraScan's simple.las (a GPS time per point) to PLY writes CloudCompare's
+// scalar_GpsTime property with the file's time base, to PCD (no time field) warns, naming the scan.
+TEST(CliImport, ConvertKeepsTimesInPlyAndSaysWhereAFormatCannot) {
+  SCANREG_REQUIRE_REALDATA(data);
+  test::TempDir dir;
+  const std::filesystem::path las = data / "las_pdal" / "simple.las";
+  RunResult ply = RunCli("convert " + Quote(las) + " " + Quote(dir / "s.ply"));
+  ASSERT_EQ(ply.status, 0) << ply.output;
+  EXPECT_EQ(ply.output.find("time per point"), std::string::npos) << ply.output;
+  const std::string bytes = ReadBytes(dir / "s.ply");
+  const std::string header = bytes.substr(0, bytes.find("end_header"));
+  EXPECT_NE(header.find("property double scalar_GpsTime"), std::string::npos) << header;
+  EXPECT_NE(header.find("obj_info scanreg_time_base GPS week seconds"), std::string::npos) << header;
+  RunResult pcd = RunCli("convert " + Quote(las) + " " + Quote(dir / "s.pcd"));
+  ASSERT_EQ(pcd.status, 0) << pcd.output;
+  EXPECT_NE(pcd.output.find("scan 'simple' has a time per point (GPS week seconds), which pcd does not keep"),
+            std::string::npos)
+      << pcd.output;
+}
+
 }  // namespace
 }  // namespace scanreg

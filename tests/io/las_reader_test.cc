@@ -251,6 +251,45 @@ TEST(LasReader, EveryPointFormatIsReadExactlyThroughScaleAndOffset) {
   EXPECT_EQ(io::LasMinimumRecordLength(11), 0);
 }
 
+// A scan keeps each point's GPS time with the base the header's global encoding gives (bit 0: adjusted
+// standard GPS time, else GPS week seconds).
+TEST(LasReader, AScanKeepsEachPointsTimeAndItsBase) {
+  TempDir dir;
+  for (bool adjusted : {false, true}) {
+    SCOPED_TRACE(adjusted ? "adjusted standard GPS time" : "GPS week seconds");
+    Synthetic s;
+    s.format = 1;
+    for (int k = 0; k < 200; ++k) {  // a ring of points 10 m around, each with its own time
+      const double a = 2 * M_PI * k / 200.0;
+      s.xyz.push_back({{int(1e5 * std::cos(a)), int(1e5 * std::sin(a)), 1000 * (k % 7)}});
+      s.intensity.push_back(static_cast<std::uint16_t>(k));
+      s.gps_time.push_back((adjusted ? 3.0e8 : 2.0e5) + 0.001 * k);
+    }
+    std::string b = s.Bytes();
+    b[6] = adjusted ? 1 : 0;
+    std::ofstream(dir / "t.las", std::ios::binary) << b;
+    NullProgress progress;
+    Expected<std::vector<Scan>> scans = io::ReadScanFile(dir / "t.las", progress, CancelToken());
+    ASSERT_TRUE(scans.ok()) << scans.error().ToString();
+    const Scan& scan = scans->front();
+    ASSERT_TRUE(scan.HasTime());
+    EXPECT_EQ(scan.time_base, adjusted ? io::kAdjustedGpsTime : io::kGpsWeekSeconds);
+    std::size_t right = 0;
+    const auto check = [&](const Eigen::Vector3f& local, double t) {
+      const Eigen::Vector3d p = scan.world_from_scan * local.cast<double>();
+      for (std::size_t k = 0; k < s.xyz.size(); ++k) {
+        const Eigen::Vector3d q(s.xyz[k][0] * s.scale[0] + s.offset[0], s.xyz[k][1] * s.scale[1] + s.offset[1],
+                                s.xyz[k][2] * s.scale[2] + s.offset[2]);
+        if ((p - q).norm() < 1e-3) right += t == s.gps_time[k];
+      }
+    };
+    for (std::size_t i = 0; i < scan.size(); ++i)
+      if (scan.valid[i]) check(scan.points[i], scan.time[i]);
+    for (std::size_t k = 0; k < scan.list_points.size(); ++k) check(scan.list_points[k], scan.list_time[k]);
+    EXPECT_EQ(right, s.xyz.size());
+  }
+}
+
 // LAS 1.3 (a 235-byte header with the start of internal waveform data, formats 4 and 5 carrying
 // waveform packets): the points end where the waveform data begin.
 TEST(LasReader, ALas13FileWithInternalWaveformDataEndsItsPointsThere) {

@@ -208,6 +208,37 @@ TEST(LasWriter, ColourSelectsFormat7With16BitChannels) {
   }
 }
 
+// Per-point times (LAS 1.4 R15 table 13: GPS time, a double at byte 22 of format 6) are written as
+// given, and the global encoding's bit 0 (table 4) says adjusted standard GPS time when they are;
+// without times every GPS time is 0 and the bit is clear. A NaN time is refused.
+TEST(LasWriter, GpsTimesAndTheirBaseAreWritten) {
+  TempDir dir;
+  LasCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 2, 3}, {-4, 5, 6}};
+  cloud.gps_time = {3.0e8 + 0.125, 3.0e8 + 0.25, 1.5};
+  for (bool adjusted : {true, false}) {
+    cloud.adjusted_gps_time = adjusted;
+    ASSERT_TRUE(WriteLas(dir / "t.las", cloud).ok());
+    const Bytes las{ReadBytes(dir / "t.las")};
+    ASSERT_GE(las.data.size(), 375u);
+    EXPECT_EQ(las.At<std::uint16_t>(6) & 1u, adjusted ? 1u : 0u);
+    EXPECT_EQ(las.At<std::uint8_t>(kFormat), 6);
+    const std::uint32_t first = las.At<std::uint32_t>(kOffsetToPoints);
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(las.At<double>(first + i * 30 + 22), cloud.gps_time[i]) << i;
+  }
+  LasCloud untimed;
+  untimed.points = cloud.points;
+  ASSERT_TRUE(WriteLas(dir / "u.las", untimed).ok());
+  const Bytes plain{ReadBytes(dir / "u.las")};
+  EXPECT_EQ(plain.At<std::uint16_t>(6) & 1u, 0u);
+  const std::uint32_t first = plain.At<std::uint32_t>(kOffsetToPoints);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(plain.At<double>(first + i * 30 + 22), 0.0) << i;
+  cloud.gps_time[1] = std::numeric_limits<double>::quiet_NaN();
+  const Status nan = WriteLas(dir / "t.las", cloud);
+  ASSERT_FALSE(nan.ok());
+  EXPECT_NE(nan.error().message.find("point 1 has a GPS time"), std::string::npos) << nan.error().message;
+}
+
 TEST(LasWriter, EmptyCloudIsAValidFile) {
   TempDir dir;
   ASSERT_TRUE(WriteLas(dir / "empty.las", LasCloud{}).ok());
