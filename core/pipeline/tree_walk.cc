@@ -209,6 +209,7 @@ class Walker {
       LogWarning(std::string(buf) + (only_suspect ? "; the link that needed a loop failed" : "; both links failed"));
       book_.Fail(parent, child, buf);
       if (!only_suspect) book_.Fail(use_reverse ? child : best, use_reverse ? best : child, buf);
+      FailWeakLinksOfLoop(parent, best, buf);
       return true;
     }
     // A lone pair (the child has no other candidate neighbour at all, whatever became of its links)
@@ -236,6 +237,34 @@ class Walker {
       if (why.find(lone) == std::string::npos) why = why.substr(0, why.find("; a loop")) + lone;
     }
     return false;
+  }
+
+  // The tree links of a loop that does not close, beyond the two failed at once: the paths from
+  // `parent` and from `best` up to their common ancestor. The loop is open through each of them;
+  // those whose own evidence was weak are failed too (a 3-scan corridor: the open loop failed the
+  // two links through the third scan and kept a weak link, RMS 3 x the noise, that had put its
+  // scan 3.5 deg off); links with sound evidence stay, and their loops are checked in turn.
+  void FailWeakLinksOfLoop(int parent, int best, const std::string& loop) {
+    std::vector<int> up_from_best;
+    for (int a = best; a >= 0; a = order().parent[a]) up_from_best.push_back(a);
+    auto on_best_path = [&](int q) { return std::find(up_from_best.begin(), up_from_best.end(), q) != up_from_best.end(); };
+    int ancestor = parent;
+    while (ancestor >= 0 && !on_best_path(ancestor)) ancestor = order().parent[ancestor];
+    std::vector<int> below;  // the scans whose tree links lie on the loop
+    for (int a = parent; a >= 0 && a != ancestor; a = order().parent[a]) below.push_back(a);
+    for (int a : up_from_best) {
+      if (a == ancestor) break;
+      below.push_back(a);
+    }
+    for (int q : below) {
+      const int p = order().parent[q];
+      if (p < 0 || choices_.kept.count({p, q})) continue;
+      io::LinkRecord& link = book_.At(p, q).link;
+      if (link.status != io::LinkStatus::kWeak) continue;
+      const std::string why = loop + "; this link's evidence was weak (" + link.reason + ")";
+      LogWarning(scans_[p].name + " -> " + scans_[q].name + ": failed: " + why);
+      book_.Fail(p, q, why);
+    }
   }
 
   // A link that needs a loop and is not in the settled tree was never confirmed by one: it is

@@ -24,6 +24,7 @@ PoseError PairError(const test::RealSet& set, const std::vector<Eigen::Isometry3
 
 struct Trust {
   int registered = 0, pairs = 0, within = 0, wrong = 0;
+  int wrong_any_seed = 0;  // FromImportedPoses: registered pairs beyond "wrong", over every seed
 };
 
 // From 5 deg / 5 mm starts (two seeds), what `register` does on imported poses: refinement never
@@ -34,6 +35,7 @@ Trust FromImportedPoses(const test::RealSet& set) {
   NullProgress progress;
   CancelToken cancel;
   Trust t;
+  int wrong_any_seed = 0;
   for (unsigned seed : {1u, 2u}) {
     t = {};
     std::vector<Scan> scans = set.scans;
@@ -79,7 +81,9 @@ Trust FromImportedPoses(const test::RealSet& set) {
                 1e3 * r->consistency->result_rms_m);
     EXPECT_GE(t.registered, 2) << set.name;  // the root and at least one scan placed by the refinement
     EXPECT_LE(r->consistency->result_rms_m, r->consistency->start_rms_m) << set.name;
+    wrong_any_seed += t.wrong;
   }
+  t.wrong_any_seed = wrong_any_seed;
   return t;
 }
 
@@ -146,11 +150,26 @@ TEST(RealSets, KittiVelodyneSweepsRegisterWithinTheReferencesPrecision) {
   Expected<test::RealSet> set = test::LoadKittiVelodyne(data);
   ASSERT_TRUE(set.ok()) << set.error().ToString();
   const Trust imported = FromImportedPoses(*set);
+  EXPECT_EQ(imported.wrong_any_seed, 0);
   EXPECT_EQ(imported.registered, static_cast<int>(set->scans.size()));
   EXPECT_GE(imported.within, (9 * imported.pairs + 9) / 10);
   const Trust t = FromNoPoses(*set);
   EXPECT_EQ(t.registered, static_cast<int>(set->scans.size()));
   EXPECT_GE(t.within, (9 * t.pairs + 9) / 10);
+}
+
+// Three stop-and-go scans of a tilting 2D laser on a robot in a corridor (3dtk_robot_scans), the
+// reference its authors' own registration (about
+// 5 cm / 1 deg). The protocol above, and from the imported poses too no pair of registered scans
+// beyond 30 cm / 3 deg. (Before a loop that does not close also failed the weak links on its path,
+// seed 1 kept a weak link, RMS 3 x the noise, that put a scan 3.5 deg off, "registered".)
+TEST(RealSets, RobotCorridorScansAreNeverRegisteredWrong) {
+  SCANREG_REQUIRE_REALDATA(data);
+  Expected<test::RealSet> set = test::Load3dtkCorridor(data);
+  ASSERT_TRUE(set.ok()) << set.error().ToString();
+  const Trust imported = FromImportedPoses(*set);
+  EXPECT_EQ(imported.wrong_any_seed, 0);
+  FromNoPoses(*set);
 }
 
 }  // namespace
