@@ -151,11 +151,13 @@ int RunMerge(const std::vector<std::string>& argv) {
   std::printf("merged %zu of %zu scans (%s, voxel %.4g m): %zu triangles, %zu vertices, %.1f s -> %s\n", result->scans,
               project->scans.size(), merge::MergeMethodName(options.method), options.voxel_m,
               mesh.triangle_count(), mesh.vertex_count(), result->seconds, out->c_str());
-  std::printf("%zu of %zu vertices (%.1f %%) lie farther than %.4g m (1.5 voxels) from every scan point: surface "
-              "interpolated, not measured%s (the PLY's scalar_gap: metres to the nearest scan point; CloudCompare's scalar field \"gap\")\n",
+  std::printf("%zu of %zu vertices (%.1f %%) lie farther than %.4g m (1.5 voxels) from every scan point%s: surface "
+              "interpolated, not measured (the PLY's scalar_gap: metres to the nearest scan point, beyond 1.5 voxels where "
+              "interpolated; CloudCompare's scalar field \"gap\")\n",
               result->interpolated_vertices, mesh.vertex_count(),
               mesh.vertex_count() ? 100.0 * double(result->interpolated_vertices) / double(mesh.vertex_count()) : 0.0,
-              merge::FilledGap(options.voxel_m), options.fill_holes ? ", holes filled (--fill-holes)" : "");
+              merge::FilledGap(options.voxel_m),
+              options.fill_holes ? " or rest on a filled hole (--fill-holes)" : "");
   if (mesh.coloured()) std::printf("vertex colour: the scanners' colour at the nearest coloured scan point\n");
   return 0;
 }

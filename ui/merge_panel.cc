@@ -435,9 +435,9 @@ void MergePanel::OnMerged(const MergedMesh& merged) {
     text += tr("\n%L1 points in another scanner's free space left out (moving objects, stray returns).")
                 .arg(merged.moving_points);
   if (mesh_->vertex_count() > 0)
-    text += tr("\n%1 % of the vertices lie over 1.5 voxels from every scan point: interpolated%2.")
+    text += tr("\n%1 % of the vertices lie over 1.5 voxels from every scan point%2: interpolated.")
                 .arg(100.0 * double(merged.interpolated_vertices) / double(mesh_->vertex_count()), 0, 'f', 1)
-                .arg(merged.fill_holes ? tr(", holes filled") : QString());
+                .arg(merged.fill_holes ? tr(" or on a filled hole") : QString());
   if (mesh_->coloured()) text += tr("\nColoured by the scanners' colour.");
   summary_->setText(text);
 }

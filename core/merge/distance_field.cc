@@ -95,7 +95,7 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
     // marked: vertex_info.h).
     if (!options.fill_holes || over_d > d_min + 1e-3f * h) return false;  // the nearest surface's edge: no
     *distance = float(over_sum / over_w);
-    *weight = 1e-6f;
+    *weight = kFilledWeight;
     return true;
   }
   // The consensus normal of the surface nearest x (patches facing the other way - the far side of a

@@ -42,6 +42,9 @@ bool MaximumLikelihoodDistance(const RangePatches& patches, const Eigen::Vector3
 // along the normal (sigma cos(phi)); patches facing away from the nearest one (the far side of a thin
 // wall) do not vote. False, and no surface there, when no patch lies within the band or none lies
 // within a voxel of x along the surface (a hole stays a hole). `weight`: the sum of the votes' weights.
+// The weight of a grid point whose value was filled (MergeOptions::fill_holes), not measured.
+inline constexpr float kFilledWeight = 1e-6f;
+
 bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, const MergeOptions& options,
                        const std::vector<int>& candidates, float* distance, float* weight);
 

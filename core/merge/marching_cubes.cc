@@ -1,5 +1,7 @@
 #include "core/merge/marching_cubes.h"
 
+#include "core/merge/distance_field.h"
+
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -30,14 +32,22 @@ namespace {
 // (r >= 0: local vertex r; r < 0: shared edge -r - 1).
 struct BlockPiece {
   std::vector<Eigen::Vector3f> vertices;
-  std::vector<std::pair<std::array<int, 4>, Eigen::Vector3f>> shared;  // (i, j, k, axis), position
+  // Per local vertex: every cube around its edge has a filled corner (without the filled values no
+  // cube would have made it).
+  std::vector<std::uint8_t> on_filled;
+  struct Shared {
+    std::array<int, 4> key;  // (i, j, k, axis)
+    Eigen::Vector3f position;
+    std::uint8_t on_filled;
+  };
+  std::vector<Shared> shared;
   std::vector<Eigen::Vector3i> triangles;
 };
 
 void MeshBlock(const SparseGrid& grid, const SparseGrid::Block& b, BlockPiece* piece) {
   constexpr int B = SparseGrid::kBlock, P = B + 1;
-  SparseGrid::Neighbourhood around;
-  grid.Gather(b, &around);
+  SparseGrid::Neighbourhood around, weight;
+  grid.Gather(b, &around, &weight);
   const float h = float(grid.voxel());
   // Interior edges' local vertex ids, by lower end (0..B on each axis) and axis.
   std::array<int, P * P * P * 3> local;
@@ -46,12 +56,16 @@ void MeshBlock(const SparseGrid& grid, const SparseGrid::Block& b, BlockPiece* p
     for (int y = 0; y < B; ++y) {
       for (int x = 0; x < B; ++x) {
         float v[8];
+        bool filled[8];
         bool known = true;
         for (int c = 0; c < 8 && known; ++c) {
-          v[c] = around[SparseGrid::Padded(x + kCorner[c][0], y + kCorner[c][1], z + kCorner[c][2])];
+          const int at = SparseGrid::Padded(x + kCorner[c][0], y + kCorner[c][1], z + kCorner[c][2]);
+          v[c] = around[at];
+          filled[c] = weight[at] <= kFilledWeight;
           known = !std::isnan(v[c]);
         }
         if (!known) continue;
+        const std::uint8_t cube_filled = std::any_of(filled, filled + 8, [](bool f) { return f; });
         int cube = 0;
         for (int c = 0; c < 8; ++c) cube |= (v[c] < 0.0f) << c;
         if (kEdgeTable[cube] == 0) continue;
@@ -78,11 +92,17 @@ void MeshBlock(const SparseGrid& grid, const SparseGrid::Block& b, BlockPiece* p
           };
           if (interior) {
             int& id = local[((end[2] * P + end[1]) * P + end[0]) * 3 + axis];
-            if (id < 0) id = int(piece->vertices.size()), piece->vertices.push_back(position());
+            if (id < 0) {
+              id = int(piece->vertices.size());
+              piece->vertices.push_back(position());
+              piece->on_filled.push_back(cube_filled);
+            } else {
+              piece->on_filled[id] &= cube_filled;
+            }
             ids[e] = id;
           } else {
             ids[e] = -int(piece->shared.size()) - 1;  // the same edge twice in a block: the map joins them
-            piece->shared.emplace_back(key, position());
+            piece->shared.push_back({key, position(), cube_filled});
           }
         }
         for (int t = 0; kTriTable[cube][t] != -1; t += 3) {
@@ -118,11 +138,17 @@ void MeshBuilder::Add(const SparseGrid& grid, const SparseGrid::Bounds* own) {
       const BlockPiece& piece = pieces[i];
       const int offset = flushed_ + int(mesh_.vertices.size());
       mesh_.vertices.insert(mesh_.vertices.end(), piece.vertices.begin(), piece.vertices.end());
+      mesh_.on_filled.insert(mesh_.on_filled.end(), piece.on_filled.begin(), piece.on_filled.end());
       shared_id.clear();
-      for (const auto& [k, p] : piece.shared) {
-        const auto [it, fresh] = vertex_of_.try_emplace(EdgeKey{k[0], k[1], k[2], k[3]},
+      for (const BlockPiece::Shared& s : piece.shared) {
+        const auto [it, fresh] = vertex_of_.try_emplace(EdgeKey{s.key[0], s.key[1], s.key[2], s.key[3]},
                                                         flushed_ + int(mesh_.vertices.size()));
-        if (fresh) mesh_.vertices.push_back(p);
+        if (fresh) {
+          mesh_.vertices.push_back(s.position);
+          mesh_.on_filled.push_back(s.on_filled);
+        } else if (it->second >= flushed_) {  // a vertex taken already keeps its mark (a tile border)
+          mesh_.on_filled[std::size_t(it->second - flushed_)] &= s.on_filled;
+        }
         shared_id.push_back(it->second);
       }
       for (const Eigen::Vector3i& t : piece.triangles) {

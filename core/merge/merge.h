@@ -27,8 +27,9 @@ struct MergeResult {
   std::size_t known_voxels = 0;      // grid points with a field value
   std::size_t field_bytes = 0;       // memory of the sparse grid
   std::size_t removed_triangles = 0;  // in small pieces
-  // Vertices farther than FilledGap from every scan point (vertex_info.h): surface interpolated, not
-  // measured — filled holes (MergeOptions::fill_holes) and the insides of wide range-image triangles.
+  // Vertices farther than FilledGap from every scan point, or resting on filled values (vertex_info.h):
+  // surface interpolated, not measured — filled holes (MergeOptions::fill_holes) and the insides of
+  // wide range-image triangles.
   std::size_t interpolated_vertices = 0;
   std::size_t moving_points = 0;     // points left out as moving objects (MergeOptions::remove_moving)
   std::vector<std::size_t> moving_per_scan;  // the same per merged scan, in their order

@@ -77,10 +77,12 @@ std::size_t RemoveSmallPieces(Mesh& mesh, double min_fraction) {
     if (remap[v] < 0) continue;
     remap[v] = used;
     if (!mesh.info.empty()) mesh.info[used] = mesh.info[v];
+    if (!mesh.on_filled.empty()) mesh.on_filled[used] = mesh.on_filled[v];
     mesh.vertices[used++] = mesh.vertices[v];
   }
   mesh.vertices.resize(used);
   if (!mesh.info.empty()) mesh.info.resize(used);
+  if (!mesh.on_filled.empty()) mesh.on_filled.resize(used);
   for (auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) t[k] = remap[t[k]];
   return removed;

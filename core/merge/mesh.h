@@ -2,6 +2,8 @@
 // precision), and its topology checks and clean-up.
 #pragma once
 
+#include <cstdint>
+
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <vector>
@@ -15,7 +17,9 @@ namespace scanreg::merge {
 // the field interpolated (a filled hole, or the inside of a wide range-image triangle).
 struct VertexInfo {
   Rgb colour{};       // the nearest coloured scan point's; black when no scan point near has colour
-  float gap_m = 0.0f;  // metres to the nearest scan point, at most kMaxGapVoxels voxels
+  // Metres to the nearest scan point, at most kMaxGapVoxels voxels; just beyond FilledGap at least
+  // where the vertex rests on filled values (Mesh::on_filled), however near a point.
+  float gap_m = 0.0f;
 };
 constexpr double kMaxGapVoxels = 4.0;
 
@@ -24,6 +28,10 @@ struct Mesh {
   std::vector<Eigen::Vector3f> vertices;             // metres, world minus origin
   std::vector<Eigen::Vector3i> triangles;            // counter-clockwise seen from outside
   std::vector<VertexInfo> info;                      // one per vertex, or empty (not described)
+  // One per vertex from Marching Cubes (empty otherwise): 1 where every cube around the vertex's grid
+  // edge has a corner whose value was filled (MergeOptions::fill_holes: no measurement beside it),
+  // so that without the filled values the vertex would not be there; DescribeVertices marks them.
+  std::vector<std::uint8_t> on_filled;
   bool coloured = false;                             // info holds the scans' colour
 };
 

@@ -31,7 +31,7 @@ const SparseGrid::Block* SparseGrid::Find(const BlockKey& key) const {
   return it == index_.end() ? nullptr : &blocks_[it->second];
 }
 
-void SparseGrid::Gather(const Block& b, Neighbourhood* out) const {
+void SparseGrid::Gather(const Block& b, Neighbourhood* out, Neighbourhood* weights) const {
   constexpr int B = kBlock;
   const Block* around[27];
   for (int dz = -1; dz <= 1; ++dz)
@@ -47,12 +47,13 @@ void SparseGrid::Gather(const Block& b, Neighbourhood* out) const {
     for (int y = -1; y <= B; ++y) {
       for (int x = -1; x <= B; ++x) {
         const Block* n = around[side(z) * 9 + side(y) * 3 + side(x)];
-        float v = nan;
+        float v = nan, w = 0.0f;
         if (n) {
           const int l = Local(wrap(x), wrap(y), wrap(z));
-          if (n->weight[l] > 0.0f) v = n->distance[l];
+          if (n->weight[l] > 0.0f) v = n->distance[l], w = n->weight[l];
         }
         (*out)[Padded(x, y, z)] = v;
+        if (weights) (*weights)[Padded(x, y, z)] = w;
       }
     }
   }

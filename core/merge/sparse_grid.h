@@ -72,7 +72,8 @@ class SparseGrid {
   static constexpr int kPadded = kBlock + 2;
   using Neighbourhood = std::array<float, kPadded * kPadded * kPadded>;
   static int Padded(int vx, int vy, int vz) { return ((vz + 1) * kPadded + vy + 1) * kPadded + vx + 1; }
-  void Gather(const Block& b, Neighbourhood* out) const;
+  // `weights` (optional): the weights of the same grid points (0 where unknown).
+  void Gather(const Block& b, Neighbourhood* out, Neighbourhood* weights = nullptr) const;
   const Block* Find(const BlockKey& key) const;
 
  private:

@@ -50,6 +50,10 @@ void DescribeVertices(const RangePatches& patches, double voxel_m, Mesh* mesh) {
   std::optional<PointTree> coloured_tree;  // nanoflann builds no tree of no point
   if (!coloured_points.empty()) coloured_tree.emplace(3, coloured_cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   const float max_gap2 = max_gap * max_gap;
+  // A vertex whose position rests on a filled value is interpolated surface, however near a scan
+  // point: its gap is at least just beyond FilledGap.
+  const float marked = std::nextafter(float(FilledGap(voxel_m)), max_gap);
+  auto on_filled = [&](long i) { return std::size_t(i) < mesh->on_filled.size() && mesh->on_filled[i] != 0; };
 #pragma omp parallel for schedule(dynamic, 4096)
   for (long i = long(from); i < long(to); ++i) {
     const Eigen::Vector3f& x = mesh->vertices[i];
@@ -58,6 +62,7 @@ void DescribeVertices(const RangePatches& patches, double voxel_m, Mesh* mesh) {
     float d2 = 0.0f;
     if (!Nearest(tree, x, &k, &d2)) continue;
     info.gap_m = std::min(max_gap, std::sqrt(d2));
+    if (on_filled(i)) info.gap_m = std::max(info.gap_m, marked);
     if (!some || d2 > max_gap2) continue;
     if (all) {
       info.colour = patches.colour[k];

@@ -20,7 +20,8 @@ namespace scanreg::merge {
 void DescribeVertices(const RangePatches& patches, double voxel_m, Mesh* mesh);
 
 // Vertices farther than this from every scan point lie on interpolated surface ("filled"): half a
-// voxel beyond the farthest a vertex of a measured surface lies from the measurement nearest it.
+// voxel beyond the farthest a vertex of a measured surface lies from the measurement nearest it. A
+// vertex that only filled values made (Mesh::on_filled) is given a gap just beyond it.
 inline double FilledGap(double voxel_m) { return 1.5 * voxel_m; }
 // The described vertices of `mesh` beyond FilledGap (0 when not described).
 Expected<std::size_t> CountInterpolated(const MeshSource& mesh, double voxel_m);

@@ -187,6 +187,7 @@ TEST_F(MergeAccuracy, FilledHolesAreMarkedAndTheMeasuredSurfaceStaysCloserThanIt
   test::Accuracy measured[2];
   double holes[2];
   std::size_t interpolated[2];
+  std::vector<Eigen::Vector3d> unmarked[2];  // the measured surface's vertices, without and with the fill
   for (int fill = 0; fill < 2; ++fill) {
     MergeOptions o;
     o.voxel_m = kFine;
@@ -214,7 +215,10 @@ TEST_F(MergeAccuracy, FilledHolesAreMarkedAndTheMeasuredSurfaceStaysCloserThanIt
     interpolated[fill] = r->interpolated_vertices;
     EXPECT_EQ(r->interpolated_vertices, marked);
     EXPECT_EQ(far_unmarked, 0u) << "vertices farther than 1.5 voxels from every input point left unmarked";
-    EXPECT_LE(marked_near, marked / 20 + 5) << "vertices marked though an input point lies within half a voxel";
+    if (fill == 0) {  // marked by their distance alone: never beside a measurement
+      EXPECT_LE(marked_near, marked / 20 + 5) << "vertices marked though an input point lies within half a voxel";
+    }
+    unmarked[fill] = kept;
     measured[fill] = test::Measure(*truth, kept);
     const test::Accuracy of_marked = test::Measure(*truth, marked_v);
     holes[fill] = truth->Holes(all, kFine);
@@ -226,11 +230,30 @@ TEST_F(MergeAccuracy, FilledHolesAreMarkedAndTheMeasuredSurfaceStaysCloserThanIt
   }
   EXPECT_LT(holes[1], 0.5 * holes[0]);
   EXPECT_GT(interpolated[1], interpolated[0]);
-  // The measured surface stays closer to the truth than the points it came from; beside the filled
-  // surface it is less accurate than without the fill (the cubes between the two mix them).
+  // The measured surface stays closer to the truth than the points it came from, with the fill too:
+  // a vertex that only a filled value made (every cube around its edge has a filled corner) is marked,
+  // and every measured vertex of the merge without the fill is there, unmarked, with the fill.
   EXPECT_LE(measured[0].rms_m, 0.8 * of_input.rms_m);
-  EXPECT_LE(measured[1].rms_m, of_input.rms_m);
+  EXPECT_LE(measured[1].rms_m, 0.8 * of_input.rms_m);
+  // What stays unmarked with the fill is the measured surface plus the small measured pieces the fill
+  // joins to it (removed as small pieces without it): measured 5.31 -> 6.37 mm. When a vertex was
+  // marked by its distance to the points alone, the vertices of cubes with a filled corner beside
+  // the measurements counted as measured: 5.31 -> 9.14 mm.
+  EXPECT_LE(measured[1].rms_m, 1.25 * measured[0].rms_m);
   EXPECT_LE(measured[1].spurious, 0.005);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr with_fill(new pcl::PointCloud<pcl::PointXYZ>);
+  for (const Eigen::Vector3d& v : unmarked[1]) with_fill->push_back(pcl::PointXYZ(float(v.x()), float(v.y()), float(v.z())));
+  pcl::KdTreeFLANN<pcl::PointXYZ> filled_tree;
+  filled_tree.setInputCloud(with_fill);
+  std::size_t lost = 0;
+  std::vector<int> index(1);
+  std::vector<float> d2(1);
+  for (const Eigen::Vector3d& v : unmarked[0]) {
+    lost += filled_tree.nearestKSearch(pcl::PointXYZ(float(v.x()), float(v.y()), float(v.z())), 1, index, d2) != 1 ||
+            d2[0] > 1e-8f;
+  }
+  std::printf("measured vertices without the fill that the fill marked or moved: %zu of %zu\n", lost, unmarked[0].size());
+  EXPECT_LE(lost, unmarked[0].size() / 1000);
 }
 
 }  // namespace
