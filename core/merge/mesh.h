@@ -17,7 +17,7 @@ namespace scanreg::merge {
 // the field interpolated (a filled hole, or the inside of a wide range-image triangle).
 struct VertexInfo {
   Rgb colour{};       // the nearest coloured scan point's; black when no scan point near has colour
-  // Metres to the nearest scan point, at most kMaxGapVoxels voxels; just beyond FilledGap at least
+  // Metres to the nearest scan point, at most kMaxGapVoxels voxels; at least 2 voxels (MarkedGap)
   // where the vertex rests on filled values (Mesh::on_filled), however near a point.
   float gap_m = 0.0f;
 };

@@ -79,7 +79,7 @@ Status WriteWorldVertices(const MeshSource& mesh, ChunkedOutput& output) {
 
 const char* kGapComment =
     "comment scalar_gap: metres from the vertex to the nearest scan point (beyond 1.5 voxels: surface the merge "
-    "interpolated, not measured, as is every vertex of a filled hole)\n";
+    "interpolated, not measured; at least 2 voxels on a filled hole)\n";
 
 }  // namespace
 

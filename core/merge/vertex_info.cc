@@ -51,8 +51,8 @@ void DescribeVertices(const RangePatches& patches, double voxel_m, Mesh* mesh) {
   if (!coloured_points.empty()) coloured_tree.emplace(3, coloured_cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   const float max_gap2 = max_gap * max_gap;
   // A vertex whose position rests on a filled value is interpolated surface, however near a scan
-  // point: its gap is at least just beyond FilledGap.
-  const float marked = std::nextafter(float(FilledGap(voxel_m)), max_gap);
+  // point: its gap is at least MarkedGap, clearly beyond FilledGap for any reader's threshold.
+  const float marked = float(MarkedGap(voxel_m));
   auto on_filled = [&](long i) { return std::size_t(i) < mesh->on_filled.size() && mesh->on_filled[i] != 0; };
 #pragma omp parallel for schedule(dynamic, 4096)
   for (long i = long(from); i < long(to); ++i) {

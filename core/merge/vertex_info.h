@@ -20,9 +20,12 @@ namespace scanreg::merge {
 void DescribeVertices(const RangePatches& patches, double voxel_m, Mesh* mesh);
 
 // Vertices farther than this from every scan point lie on interpolated surface ("filled"): half a
-// voxel beyond the farthest a vertex of a measured surface lies from the measurement nearest it. A
-// vertex that only filled values made (Mesh::on_filled) is given a gap just beyond it.
+// voxel beyond the farthest a vertex of a measured surface lies from the measurement nearest it.
 inline double FilledGap(double voxel_m) { return 1.5 * voxel_m; }
+// The least gap of a vertex that only filled values made (Mesh::on_filled), however near a scan point:
+// half a voxel beyond FilledGap, so that a threshold at 1.5 voxels in another program (CloudCompare's
+// scalar field "gap", printed to a few decimals) finds it.
+inline double MarkedGap(double voxel_m) { return 2.0 * voxel_m; }
 // The described vertices of `mesh` beyond FilledGap (0 when not described).
 Expected<std::size_t> CountInterpolated(const MeshSource& mesh, double voxel_m);
 
