@@ -37,6 +37,17 @@ void ApplyPose(Scan& scan) {
   scan.angles = AngularGrid{};
 }
 
+// A per-point attribute in ForEachPoint's order: the grid's valid cells, then the list.
+template <typename T>
+std::vector<T> InPointOrder(const Scan& scan, const std::vector<T>& cells, const std::vector<T>& listed) {
+  std::vector<T> out;
+  out.reserve(scan.CountPoints());
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i]) out.push_back(cells[i]);
+  out.insert(out.end(), listed.begin(), listed.end());
+  return out;
+}
+
 // One scan as LAS: world coordinates (double), intensity from reflectance, colour when the scan has
 // one (point format 7), each point's time when the scan has them, point source ID = the scan's number in the project (from 1: LAS reserves 0),
 // named in the file's VLR.
@@ -46,15 +57,9 @@ Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::ui
     cloud.points.push_back(scan.world_from_scan * p.cast<double>());
     cloud.reflectance.push_back(refl);
   });
-  if (scan.HasColour()) {  // in ForEachPoint's order: the grid's valid cells, then the list
-    for (std::size_t i = 0; i < scan.size(); ++i)
-      if (scan.valid[i]) cloud.rgb.push_back(scan.colour[i]);
-    cloud.rgb.insert(cloud.rgb.end(), scan.list_colour.begin(), scan.list_colour.end());
-  }
-  if (scan.HasTime()) {  // the same order
-    for (std::size_t i = 0; i < scan.size(); ++i)
-      if (scan.valid[i]) cloud.gps_time.push_back(scan.time[i]);
-    cloud.gps_time.insert(cloud.gps_time.end(), scan.list_time.begin(), scan.list_time.end());
+  if (scan.HasColour()) cloud.rgb = InPointOrder(scan, scan.colour, scan.list_colour);
+  if (scan.HasTime()) {
+    cloud.gps_time = InPointOrder(scan, scan.time, scan.list_time);
     cloud.adjusted_gps_time = scan.time_base == io::kAdjustedGpsTime;
   }
   cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
