@@ -65,7 +65,8 @@ json PairResultToJson(const PairResult& r) {
           {"coarse_inlier_matches", r.coarse_inlier_matches},
           {"needs_loop", r.needs_loop},
           {"needs_loop_if_checkable", r.needs_loop_if_checkable},
-          {"same_spot", r.same_spot}};
+          {"same_spot", r.same_spot},
+          {"surfaces_only", r.surfaces_only}};
 }
 
 Expected<PairResult> PairResultFromJson(const json& j, const std::string& where) {
@@ -84,6 +85,7 @@ Expected<PairResult> PairResultFromJson(const json& j, const std::string& where)
     r.needs_loop = j.at("needs_loop").get<bool>();
     r.needs_loop_if_checkable = j.value("needs_loop_if_checkable", false);
     r.same_spot = j.value("same_spot", false);
+    r.surfaces_only = j.value("surfaces_only", false);
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, where + ": " + e.what());
   }

@@ -483,6 +483,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     }
     return finish();
   }
+  result.surfaces_only = true;
   // A plan-view pose: the surfaces are its only evidence, so they must be clear — what would make
   // a feature-supported link weak fails it (two similar streets far apart can overlap 10 % at a
   // plan-view pose), and so does a close second pose.

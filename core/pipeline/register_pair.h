@@ -77,6 +77,8 @@ struct PairResult {
   bool needs_loop_if_checkable = false;
   // The pose puts both scanners on one spot (SameSpot): the two scans look alike from there.
   bool same_spot = false;
+  // The pose rests on the surfaces alone (a plan-view pose that too few correspondences confirm).
+  bool surfaces_only = false;
   bool NeedsLoop() const { return needs_loop || needs_loop_if_checkable; }
 };
 
