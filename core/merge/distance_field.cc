@@ -58,10 +58,8 @@ bool ConsensusDistance(const RangePatches& patches, const Eigen::Vector3f& x, co
   const float on_patch2 = 1e-6f * h * h;
   for (int id : candidates) {
     const Patch& p = patches.patches[id];
-    const Eigen::Vector3f& a = patches.points[p.v[0]];
-    const Eigen::Vector3f& b = patches.points[p.v[1]];
-    const Eigen::Vector3f& c = patches.points[p.v[2]];
-    const Eigen::Vector3f centre = (a + b + c) / 3.0f;
+    // The patch's corners are read only for its nearest point: its centre and radius are stored.
+    const Eigen::Vector3f& centre = patches.centroid[id];
     const Eigen::Vector3f to_x = x - centre;
     // The patch's nearest point only where it may be nearer than the nearest so far (its bounding
     // sphere's): the same d_min and nearest normal, without most of the closest-point tests.
