@@ -221,10 +221,7 @@ class Walker {
              std::max(walk_.weights(q, child), walk_.weights(child, q)) < source_.min_check_weight;
     if (needs_loop && (book_.At(parent, child).needs_loop || !lone)) {
       const std::string why = book_.At(parent, child).link.reason;
-      const int child_twin = Twin(parent, child);
-      const int parent_twin = book_.At(parent, child).surfaces_only ? Twin(child, parent) : -1;
-      const int alike = child_twin >= 0 ? child : parent;
-      const int twin = child_twin >= 0 ? child_twin : parent_twin;
+      const auto [alike, twin] = AlikeScan(parent, child);
       const std::string twin_note =
           twin >= 0 && !book_.At(parent, child).NeedsLoop()
               ? "; " + scans_[alike].name + " looks the same from the spot of " + scans_[twin].name +
@@ -310,8 +307,15 @@ class Walker {
   // from a parent with a twin stay: a busy street's stations with a 180° twin kept 5 of 6 scans,
   // all right; asking their links for loops too kept 3.
   bool NeedsLoop(int parent, int child) const {
-    const PairResult& link = book_.At(parent, child);
-    return link.NeedsLoop() || Twin(parent, child) >= 0 || (link.surfaces_only && Twin(child, parent) >= 0);
+    return book_.At(parent, child).NeedsLoop() || AlikeScan(parent, child).second >= 0;
+  }
+  // The scan of the link that has a twin, and the twin: the child's first, then — for a pose on the
+  // surfaces alone — the parent's; {-1, -1} when neither counts.
+  std::pair<int, int> AlikeScan(int parent, int child) const {
+    if (const int twin = Twin(parent, child); twin >= 0) return {child, twin};
+    if (book_.At(parent, child).surfaces_only)
+      if (const int twin = Twin(child, parent); twin >= 0) return {parent, twin};
+    return {-1, -1};
   }
 
   const std::vector<Scan>& scans_;
