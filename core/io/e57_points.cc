@@ -29,6 +29,7 @@ enum class Role {
   kColumn,
   kInvalid,
   kReturn,
+  kTime,
   kOther
 };
 
@@ -65,6 +66,7 @@ std::vector<FieldStream> MakeStreams(const ScanDesc& scan) {
     if (n == "columnIndex") s.role = Role::kColumn;
     if (n == invalid_name) s.role = Role::kInvalid;
     if (n == "returnIndex") s.role = Role::kReturn;
+    if (n == "timeStamp") s.role = Role::kTime;
   }
   return streams;
 }
@@ -198,6 +200,9 @@ class RecordDecoder {
           (s.role == Role::kRow ? out_.row : out_.column)[i] = static_cast<std::int32_t>(raw);
           break;
         }
+        case Role::kTime:
+          out_.time[i] = value;
+          break;
         case Role::kInvalid:
         case Role::kReturn:
           valid = valid && value == 0.0;
@@ -215,8 +220,9 @@ class RecordDecoder {
     const Eigen::Vector3d p(c[0], c[1], c[2]);
     out_.valid[i] = valid;
     if (!valid) return Status::Ok();
-    if (!p.allFinite() || (!out_.intensity.empty() && !std::isfinite(out_.intensity[i]))) {
-      return Bad(i, "a NaN or infinite coordinate or intensity, but the point is not marked invalid");
+    if (!p.allFinite() || (!out_.intensity.empty() && !std::isfinite(out_.intensity[i])) ||
+        (!out_.time.empty() && !std::isfinite(out_.time[i]))) {
+      return Bad(i, "a NaN or infinite coordinate, intensity or timeStamp, but the point is not marked invalid");
     }
     if (!shift_decided_) {
       shift_decided_ = true;
@@ -282,6 +288,7 @@ Expected<PointRecords> ReadPoints(PagedReader& file, const ScanDesc& scan, const
     if (s.role == Role::kIntensity) out.intensity.resize(n);
     if (s.role == Role::kRow) out.row.resize(n);
     if (s.role == Role::kColumn) out.column.resize(n);
+    if (s.role == Role::kTime) out.time.resize(n);
   }
   if (scan.FieldIndex("colorRed") >= 0 && scan.FieldIndex("colorGreen") >= 0 && scan.FieldIndex("colorBlue") >= 0)
     out.colour.assign(n, Eigen::Vector3f::Zero());

@@ -30,6 +30,7 @@ struct PointRecords {
   std::vector<float> intensity;           // as stored; empty when the scan has none
   std::vector<Eigen::Vector3f> colour;    // colorRed, colorGreen, colorBlue as stored; empty without all three
   std::vector<std::int32_t> row, column;  // rowIndex / columnIndex; empty when the scan has no grid
+  std::vector<double> time;               // timeStamp, seconds as stored; empty when the scan has none
 };
 
 // Reads the section in chunks: memory holds the records, not the compressed section.

@@ -7,6 +7,7 @@
 #include "core/io/e57_pages.h"
 #include "core/io/e57_points.h"
 #include "core/io/e57_xml.h"
+#include "core/io/las_reader.h"
 #include "core/io/organize_default.h"
 
 namespace scanreg::io {
@@ -106,6 +107,13 @@ Rgb StoredToRgb(const Eigen::Vector3f& stored, const std::pair<double, double>& 
   return ToRgb((stored[0] - range.first) * scale, (stored[1] - range.first) * scale, (stored[2] - range.first) * scale);
 }
 
+// A record's time in the scan's time base (TimeBase): GPS seconds - 1e9 from the acquisitionStart.
+double PointTime(const e57::PointRecords& records, const e57::ScanDesc& desc, std::size_t i) {
+  return desc.acquisition_start ? (*desc.acquisition_start - kAdjustedGpsOffset) + records.time[i] : records.time[i];
+}
+
+const char* TimeBase(const e57::ScanDesc& desc) { return desc.acquisition_start ? kAdjustedGpsTime : kE57ScanSeconds; }
+
 Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& desc, std::string name,
                         const std::string& where, const std::pair<double, double>& intensity_range) {
   std::int64_t row_min = std::numeric_limits<std::int64_t>::max(), row_max = std::numeric_limits<std::int64_t>::min();
@@ -143,6 +151,7 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
   Scan scan(std::move(name), int(rows), int(cols));
   const auto colour_range = ColourRange(desc);
   if (!records.colour.empty()) scan.AddColour();
+  if (!records.time.empty()) scan.AddTime();
   const double scale =
       intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
   for (std::size_t i = 0; i < records.xyz.size(); ++i) {
@@ -155,10 +164,12 @@ Expected<Scan> GridScan(const e57::PointRecords& records, const e57::ScanDesc& d
       scan.list_points.push_back(records.xyz[i]);
       scan.list_reflectance.push_back(refl);
       if (scan.HasColour()) scan.list_colour.push_back(StoredToRgb(records.colour[i], colour_range));
+      if (scan.HasTime()) scan.list_time.push_back(PointTime(records, desc, i));
       continue;
     }
     scan.Set(r, c, records.xyz[i], refl);
     if (scan.HasColour()) scan.colour[scan.Index(r, c)] = StoredToRgb(records.colour[i], colour_range);
+    if (scan.HasTime()) scan.time[scan.Index(r, c)] = PointTime(records, desc, i);
   }
   EstimateAngularGrid(scan);
   return scan;
@@ -169,6 +180,7 @@ Expected<Scan> CloudScan(const e57::PointRecords& records, const e57::ScanDesc& 
   std::vector<Eigen::Vector3f> points;
   std::vector<float> reflectance;
   std::vector<Rgb> colour;
+  std::vector<double> time;
   const auto colour_range = ColourRange(desc);
   const double scale =
       intensity_range.second > intensity_range.first ? 1.0 / (intensity_range.second - intensity_range.first) : 0.0;
@@ -179,8 +191,9 @@ Expected<Scan> CloudScan(const e57::PointRecords& records, const e57::ScanDesc& 
                               ? 0.5f
                               : float((records.intensity[i] - intensity_range.first) * scale));
     if (!records.colour.empty()) colour.push_back(StoredToRgb(records.colour[i], colour_range));
+    if (!records.time.empty()) time.push_back(PointTime(records, desc, i));
   }
-  return OrganizeCloudByDensity(points, reflectance, std::move(name), where, colour);
+  return OrganizeCloudByDensity(points, reflectance, std::move(name), where, colour, time);
 }
 
 }  // namespace
@@ -232,6 +245,7 @@ Expected<std::vector<Scan>> ReadE57(const std::filesystem::path& path, const E57
                                          : CloudScan(*records, desc, std::move(name), where, intensity_range);
     if (!scan) return scan.error();
     scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(records->shift);
+    if (scan->HasTime()) scan->time_base = TimeBase(desc);
     scans.push_back(std::move(*scan));
   }
   progress.Report(1.0, "reading " + path.filename().string());

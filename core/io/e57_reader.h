@@ -5,7 +5,9 @@
 // the field's limits), becomes reflectance; without intensity reflectance is 0.5. colorRed/Green/Blue
 // become the scan's colour, mapped to 0..255 with colorLimits (or the fields' limits). The pose
 // becomes world_from_scan. Points with a non-zero cartesian/sphericalInvalidState are left out;
-// a later point of a grid cell (a second return) joins the scan's list_points.
+// a later point of a grid cell (a second return) joins the scan's list_points. A timeStamp per point
+// becomes the scan's time: adjusted standard GPS time (kAdjustedGpsTime, as LAS keeps it) when the
+// scan gives its acquisitionStart, the timeStamp as stored (kE57ScanSeconds) when it does not.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +20,10 @@
 #include "core/geometry/scan.h"
 
 namespace scanreg::io {
+
+// Scan::time_base of E57 times without a date (ASTM E2807 §8.4.3: a timeStamp counts from the
+// scan's acquisitionStart, in GPS seconds, which the file need not give).
+inline constexpr const char* kE57ScanSeconds = "seconds from the scan's start (E57 timeStamp, no acquisitionStart)";
 
 // What ListE57Scans tells without decoding points.
 struct E57ScanInfo {

@@ -2,17 +2,23 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <pugixml.hpp>
 #include <random>
 #include <sstream>
 
 #include "core/common/atomic_file.h"
+#include "core/common/log.h"
 #include "core/io/e57_bitpack.h"
 #include "core/io/e57_pages.h"
 #include "core/io/e57_points.h"
+#include "core/io/e57_reader.h"
+#include "core/io/las_reader.h"
 #include "core/io/text_parse.h"
 
 namespace scanreg::io {
@@ -30,19 +36,30 @@ struct WrittenScan {
   std::uint64_t records = 0;
   bool structured = true;  // rowIndex/columnIndex written: the scan has no point off its grid
   bool colour = false;     // colorRed, colorGreen, colorBlue written (8 bits each)
+  bool time = false;       // timeStamp written (double)
+  // The acquisitionStart (GPS seconds) the timeStamps count from: a whole second at or before the
+  // first time, when the scan's times are GPS times; none otherwise (the times as they are).
+  std::optional<double> acquisition_start;
   int row_bits = 0, col_bits = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
   double intensity_lo = 0.0, intensity_hi = 1.0;
 };
 
-// x, y, z, intensity, then colorRed, colorGreen, colorBlue with colour, then rowIndex, columnIndex
-// when structured.
-int Streams(const WrittenScan& info) { return 4 + (info.colour ? 3 : 0) + (info.structured ? 2 : 0); }
+// x, y, z, intensity, then colorRed, colorGreen, colorBlue with colour, timeStamp with time, then
+// rowIndex, columnIndex when structured.
+int ValueStreams(const WrittenScan& info) { return 4 + (info.colour ? 3 : 0) + (info.time ? 1 : 0); }
+int Streams(const WrittenScan& info) { return ValueStreams(info) + (info.structured ? 2 : 0); }
+
+// A point's timeStamp: its time from the acquisitionStart.
+double TimeStamp(double time, const WrittenScan& info) {
+  return info.acquisition_start ? time - (*info.acquisition_start - kAdjustedGpsOffset) : time;
+}
 
 std::uint64_t PacketLength(std::size_t records, const WrittenScan& info) {
   const std::uint64_t index_bytes =
       info.structured ? (records * info.row_bits + 7) / 8 + (records * info.col_bits + 7) / 8 : 0;
-  const std::uint64_t bytes = 6 + 2 * Streams(info) + 4 * 4 * records + (info.colour ? 3 * records : 0) + index_bytes;
+  const std::uint64_t bytes = 6 + 2 * Streams(info) + 4 * 4 * records + (info.colour ? 3 * records : 0) +
+                              (info.time ? 8 * records : 0) + index_bytes;
   return (bytes + 3) / 4 * 4;
 }
 
@@ -66,6 +83,13 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
     if (scan.valid[i]) cells.push_back(i);
   info->structured = scan.list_points.empty();
   info->colour = scan.HasColour();
+  info->time = scan.HasTime();
+  if (info->time && scan.time_base == kAdjustedGpsTime) {
+    double first = std::numeric_limits<double>::infinity();
+    for (std::size_t i : cells) first = std::min(first, scan.time[i]);
+    for (double t : scan.list_time) first = std::min(first, t);
+    if (std::isfinite(first)) info->acquisition_start = std::floor(first) + kAdjustedGpsOffset;
+  }
   info->records = cells.size() + scan.list_points.size();
   info->row_bits = e57::BitWidth(0, scan.rows - 1);
   info->col_bits = e57::BitWidth(0, scan.cols - 1);
@@ -87,8 +111,8 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
   float ilo = 0.0f, ihi = 1.0f;
   info->lo = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : 1e300);
   info->hi = Eigen::Vector3d::Constant(info->records == 0 ? 0.0 : -1e300);
-  std::string streams[7], packet;  // x y z intensity red green blue
-  const int value_streams = info->colour ? 7 : 4;
+  std::string streams[8], packet;  // x y z intensity, red green blue, time: as ValueStreams orders them
+  const int value_streams = ValueStreams(*info);
   for (std::size_t b = 0; b < info->records; b += kRecordsPerPacket) {
     if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, target + ": writing cancelled");
     if ((b / kRecordsPerPacket) % kPacketsPerReport == 0) {
@@ -106,6 +130,12 @@ Status WriteScanPoints(e57::PagedWriter& w, const Scan& scan, WrittenScan* info,
       if (info->colour) {
         const Rgb& c = on_grid ? scan.colour[cells[k]] : scan.list_colour[k - cells.size()];
         for (int ch = 0; ch < 3; ++ch) streams[4 + ch].push_back(static_cast<char>(c[ch]));
+      }
+      if (info->time) {
+        const double t = TimeStamp(on_grid ? scan.time[cells[k]] : scan.list_time[k - cells.size()], *info);
+        char bytes[8];
+        std::memcpy(bytes, &t, 8);
+        streams[info->colour ? 7 : 4].append(bytes, 8);
       }
       ilo = std::min(ilo, refl), ihi = std::max(ihi, refl);
       info->lo = info->lo.cwiseMin(p.cast<double>()), info->hi = info->hi.cwiseMax(p.cast<double>());
@@ -202,6 +232,11 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
       IntegerElement(colour, (std::string(name) + "Maximum").c_str(), 255);
     }
   }
+  if (info.acquisition_start) {
+    pugi::xml_node start = Element(child, "acquisitionStart", "Structure");
+    FloatElement(start, "dateTimeValue", *info.acquisition_start);
+    IntegerElement(start, "isAtomicClockReferenced", 0);
+  }
   pugi::xml_node box = Element(child, "cartesianBounds", "Structure");
   const char* names[3][2] = {{"xMinimum", "xMaximum"}, {"yMinimum", "yMaximum"}, {"zMinimum", "zMaximum"}};
   for (int d = 0; d < 3; ++d) FloatElement(box, names[d][0], info.lo[d]), FloatElement(box, names[d][1], info.hi[d]);
@@ -214,6 +249,7 @@ void ScanXml(pugi::xml_node data3d, const Scan& scan, const WrittenScan& info, s
   }
   for (const char* name : {"colorRed", "colorGreen", "colorBlue"})
     if (info.colour) PrototypeInteger(prototype, name, 255);
+  if (info.time) Element(prototype, "timeStamp", "Float");  // double precision
   if (info.structured) {
     PrototypeInteger(prototype, "rowIndex", scan.rows - 1);
     PrototypeInteger(prototype, "columnIndex", scan.cols - 1);
@@ -262,6 +298,11 @@ Status WriteE57(const std::filesystem::path& path, const std::vector<Scan>& scan
                        target + ": scan '" + scan.name + "' has an empty grid; E57 needs rows and columns");
     }
     total += scan.CountPoints();
+    if (scan.HasTime() && scan.time_base != kAdjustedGpsTime && scan.time_base != kE57ScanSeconds)
+      LogWarning(target + ": scan '" + scan.name + "' has times in " +
+                 (scan.time_base.empty() ? std::string("an unknown base") : "'" + scan.time_base + "'") +
+                 ", which has no GPS date: they are written as E57 timeStamps without an acquisitionStart; "
+                 "export las or ply to keep the base");
   }
   AtomicFile file(path);
   if (Status s = file.Open(); !s) return s;

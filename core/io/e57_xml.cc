@@ -69,6 +69,11 @@ class ScanParser {
       if (Status s = Number(l.child("colorRedMaximum"), "colorLimits/colorRedMaximum", 0.0, &hi); !s) return s.error();
       if (hi > lo) scan.colour_limits = std::make_pair(lo, hi);
     }
+    if (const pugi::xml_node start = node.child("acquisitionStart").child("dateTimeValue")) {
+      double t = 0;
+      if (Status s = Number(start, "acquisitionStart/dateTimeValue", 0.0, &t); !s) return s.error();
+      scan.acquisition_start = t;
+    }
     return scan;
   }
 

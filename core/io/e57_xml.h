@@ -48,6 +48,9 @@ struct ScanDesc {
   std::optional<IndexBounds> index_bounds;
   std::optional<std::pair<double, double>> intensity_limits;
   std::optional<std::pair<double, double>> colour_limits;  // colorLimits: colorRedMinimum, colorRedMaximum
+  // acquisitionStart/dateTimeValue: GPS seconds (since GPS time was zero) that the points' timeStamp
+  // counts from (ASTM E2807 §8.4.3).
+  std::optional<double> acquisition_start;
 
   // Index of the named field in `fields`, or -1.
   int FieldIndex(std::string_view field_name) const;

@@ -46,6 +46,7 @@ struct LasPoints {
 // Scan::time_base of times read from LAS, by the header's global encoding bit 0 (LAS 1.4 R15, table 4).
 inline constexpr const char* kGpsWeekSeconds = "GPS week seconds";
 inline constexpr const char* kAdjustedGpsTime = "adjusted standard GPS time (GPS seconds - 1e9)";
+inline constexpr double kAdjustedGpsOffset = 1e9;  // GPS seconds = adjusted standard GPS time + this
 
 // The minimum record length of a point data format (0-10); 0 for an unknown format.
 int LasMinimumRecordLength(int point_format);

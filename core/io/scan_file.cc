@@ -56,11 +56,11 @@ Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>&
                                                               "(scanreg-cli export-clouds PROJECT --out DIR --format las)");
   }
   if (ext != ".ptx" && ext != ".e57" && ext != ".ply" && ext != ".pcd") return UnknownExtension(path);
-  if (ext != ".ply") {  // PTX and PCD have no time field; E57 timeStamp is not read or written yet
+  if (ext == ".ptx" || ext == ".pcd") {  // no time field
     for (const Scan& scan : scans)
       if (scan.HasTime())
         LogWarning(path.string() + ": scan '" + scan.name + "' has a time per point (" + scan.time_base +
-                   "), which " + ext.substr(1) + " does not keep here; export ply or las to keep it");
+                   "), which " + ext.substr(1) + " does not keep; export ply, las or e57 to keep it");
   }
   if (ext == ".ptx") return WritePtx(path, scans, progress, cancel);
   if (ext == ".e57") return WriteE57(path, scans, progress, cancel);
