@@ -30,6 +30,7 @@
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/scan_store.h"
 #include "core/simulate/project_sim.h"
+#include "tests/io/e57_test_util.h"
 #include "tests/support/test_paths.h"
 
 namespace scanreg {
@@ -336,14 +337,17 @@ TEST(ThirdPartyReaders, AMergedCloudIsImportedAndExportedWithEveryPoint) {
     ASSERT_EQ(exported->size(), 1u);
     EXPECT_EQ((*exported)[0].points, merged.size());
     const std::filesystem::path out = (*exported)[0].file;
-    if (std::string(format) == "e57") {
+    std::vector<Eigen::Vector3d> read;
+    if (std::string(format) == "e57") {  // decoded by the standard, not by our reader
       std::ifstream in(out, std::ios::binary);
       const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      EXPECT_NE(bytes.find("recordCount=\"" + std::to_string(merged.size()) + "\""), std::string::npos);
-      EXPECT_EQ(bytes.find("rowIndex"), std::string::npos);  // unstructured: the list has no cells
-      continue;
+      const test::E57BySpecification e57 = test::DecodeE57BySpecification(bytes);
+      EXPECT_TRUE(e57.Field("rowIndex").empty());  // unstructured: the list has no cells
+      ASSERT_EQ(e57.Field("cartesianZ").size(), e57.records);
+      for (std::size_t r = 0; r < e57.records; ++r) read.push_back(e57.World(r));
+    } else {
+      read = std::string(format) == "ply" ? ReadPlyWithPcl(out) : ReadLasBySpecification(out);
     }
-    const std::vector<Eigen::Vector3d> read = std::string(format) == "ply" ? ReadPlyWithPcl(out) : ReadLasBySpecification(out);
     ASSERT_EQ(read.size(), merged.size());
     EXPECT_LT(WorstDistance(read, merged, 0.01), 1e-4);  // 0.1 mm
     EXPECT_LT(WorstDistance(merged, read, 0.01), 1e-4);  // and every input point is there
@@ -478,8 +482,9 @@ Rgb ColourAt(const Eigen::Vector3d& p) {
 
 // A scan with colour, as a scanner with a camera writes it (a Leica-style PTX of `x y z i r g b`
 // lines), keeps its colour on import and in every export: PCL's PLY reader, the LAS records
-// decoded by the specification (point format 7, RGB at byte 30, 16 bits a channel) and our E57
-// and PTX readers give back each point's own colour.
+// decoded by the specification (point format 7, RGB at byte 30, 16 bits a channel), the E57 decoded
+// by the standard (test::DecodeE57BySpecification: colorRed/Green/Blue bit-packed integers) and our
+// PTX reader give back each point's own colour.
 TEST(ThirdPartyReaders, AScansColourIsKeptOnImportAndInEveryExport) {
   test::TempDir dir;
   const int rows = 20, cols = 30;
@@ -565,6 +570,17 @@ TEST(ThirdPartyReaders, AScansColourIsKeptOnImportAndInEveryExport) {
         }
         read.push_back({xyz[k], c});
       }
+    } else if (std::string(format) == "e57") {  // decoded by the standard, not by our reader
+      std::ifstream in(out, std::ios::binary);
+      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const test::E57BySpecification e57 = test::DecodeE57BySpecification(bytes);
+      const auto &x = e57.Field("cartesianX"), &y = e57.Field("cartesianY"), &z = e57.Field("cartesianZ");
+      const auto &red = e57.Field("colorRed"), &green = e57.Field("colorGreen"), &blue = e57.Field("colorBlue");
+      ASSERT_EQ(red.size(), e57.records) << "no colorRed, colorGreen, colorBlue for every record";
+      ASSERT_EQ(blue.size(), e57.records);
+      ASSERT_EQ(x.size(), e57.records);
+      for (std::size_t k = 0; k < e57.records; ++k)  // the pose is the identity: scanner frame = world
+        read.push_back({Eigen::Vector3d(x[k], y[k], z[k]), Rgb{std::uint8_t(red[k]), std::uint8_t(green[k]), std::uint8_t(blue[k])}});
     } else {
       Expected<std::vector<Scan>> back = io::ReadScanFile(out, progress, cancel);
       ASSERT_TRUE(back.ok()) << back.error().ToString();
@@ -640,7 +656,8 @@ std::size_t WrongTimes(const std::vector<std::pair<Eigen::Vector3d, double>>& re
 
 // Issue 34 item 1: a point keeps its time. An airborne strip written by TerraScan (PDAL's
 // simple.las: LAS 1.2, format 3, a GPS time per point) is imported with every point's own time and
-// exported with it: PCL reads the PLY's scalar_GpsTime property (CloudCompare's name), the LAS's records decoded by the
+// exported with it (E57: decoded by the standard, timeStamps without a date, as week seconds have none):
+// PCL reads the PLY's scalar_GpsTime property (CloudCompare's name), the LAS's records decoded by the
 // specification hold them with the file's time base (global encoding bit 0), each at its point.
 TEST(ThirdPartyReaders, EveryPointKeepsItsGpsTimeFromImportToExport) {
   SCANREG_REQUIRE_REALDATA(data);
@@ -666,7 +683,7 @@ TEST(ThirdPartyReaders, EveryPointKeepsItsGpsTimeFromImportToExport) {
   EXPECT_EQ(WrongTimes(imported, truth), 0u);
 
   in->project.scans[0].registered = true;
-  for (const char* format : {"ply", "las"}) {
+  for (const char* format : {"ply", "las", "e57"}) {
     SCOPED_TRACE(format);
     pipeline::ExportCloudsOptions options;
     options.dir = dir / format;
@@ -692,6 +709,15 @@ TEST(ThirdPartyReaders, EveryPointKeepsItsGpsTimeFromImportToExport) {
         std::memcpy(&t, cloud.data.data() + i * cloud.point_step + time, 8);
         read.push_back({p, t});
       }
+    } else if (std::string(format) == "e57") {  // decoded by the standard: GPS week seconds name no date,
+      std::ifstream in(out, std::ios::binary);  // so the timeStamps are the times themselves
+      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const test::E57BySpecification e57 = test::DecodeE57BySpecification(bytes);
+      EXPECT_EQ(e57.acquisition_start.has_value(), truth.adjusted);
+      const std::vector<double>& t = e57.Field("timeStamp");
+      ASSERT_EQ(t.size(), e57.records);
+      for (std::size_t r = 0; r < e57.records; ++r)
+        read.push_back({e57.World(r), truth.adjusted ? *e57.acquisition_start - 1e9 + t[r] : t[r]});
     } else {
       const TimedLas las = ReadTimesBySpecification(out);
       EXPECT_EQ(las.adjusted, truth.adjusted);

@@ -1,7 +1,7 @@
 // A time per point in E57 (issue 34): written as the timeStamp field, counted from the scan's
 // acquisitionStart (ASTM E2807 §8.4.3) when the times are GPS times, and read back in the base they
 // came in. The file is checked by decoding it as the standard lays it out (pages, XML, the points
-// section's packets), not only with our reader.
+// section's packets; test::DecodeE57BySpecification), not only with our reader.
 #include <gtest/gtest.h>
 #include <pugixml.hpp>
 
@@ -29,82 +29,6 @@ using test::PagedBytes;
 using test::ReadBytes;
 using test::TempDir;
 using test::WriteBytes;
-
-// What the standard says the file holds for one scan whose prototype has only Float fields.
-struct Decoded {
-  bool has_start = false;
-  double start = 0;                            // acquisitionStart/dateTimeValue
-  std::vector<std::vector<double>> records;    // one value per prototype field
-  std::vector<std::string> fields;
-  int Field(const std::string& name) const {
-    for (std::size_t i = 0; i < fields.size(); ++i)
-      if (fields[i] == name) return static_cast<int>(i);
-    return -1;
-  }
-};
-
-// Decodes pages (1020 data bytes + CRC each), the XML section (offset and length at bytes 24 and
-// 32 of the header), and the CompressedVector's data packets: 1 type byte, 1 flag byte, length - 1
-// (2 bytes), bytestream count (2), each bytestream's length (2), then the bytestreams.
-Decoded DecodeBySpecification(const std::string& file) {
-  Decoded out;
-  const std::string logical = LogicalBytes(file);
-  const auto to_logical = [](std::uint64_t physical) { return physical / 1024 * 1020 + physical % 1024; };
-  std::uint64_t xml_offset = 0, xml_length = 0;
-  std::memcpy(&xml_offset, &logical[24], 8);
-  std::memcpy(&xml_length, &logical[32], 8);
-  pugi::xml_document doc;
-  EXPECT_TRUE(doc.load_string(logical.substr(to_logical(xml_offset), xml_length).c_str()));
-  const pugi::xml_node scan = doc.child("e57Root").child("data3D").first_child();
-  if (const pugi::xml_node start = scan.child("acquisitionStart").child("dateTimeValue")) {
-    out.has_start = true;
-    out.start = std::stod(start.text().get());
-  }
-  const pugi::xml_node points = scan.child("points");
-  std::vector<int> bytes;
-  for (pugi::xml_node f = points.child("prototype").first_child(); f; f = f.next_sibling()) {
-    EXPECT_STREQ(f.attribute("type").value(), "Float") << f.name();
-    out.fields.push_back(f.name());
-    bytes.push_back(std::string(f.attribute("precision").value()) == "single" ? 4 : 8);
-  }
-  const std::uint64_t count = std::stoull(points.attribute("recordCount").value());
-  const std::uint64_t section = to_logical(std::stoull(points.attribute("fileOffset").value()));
-  std::uint64_t data = 0;
-  std::memcpy(&data, &logical[section + 16], 8);
-  std::uint64_t at = to_logical(data);
-  std::vector<std::vector<double>> columns(bytes.size());
-  while (columns[0].size() < count && at + 6 <= logical.size()) {
-    EXPECT_EQ(logical[at], 1) << "a data packet";
-    std::uint16_t length = 0, streams = 0;
-    std::memcpy(&length, &logical[at + 2], 2);
-    std::memcpy(&streams, &logical[at + 4], 2);
-    EXPECT_EQ(streams, bytes.size());
-    std::uint64_t pos = at + 6 + 2 * streams;
-    for (std::size_t s = 0; s < streams; ++s) {
-      std::uint16_t n = 0;
-      std::memcpy(&n, &logical[at + 6 + 2 * s], 2);
-      for (std::uint64_t k = 0; k < n; k += bytes[s]) {
-        if (bytes[s] == 4) {
-          float v;
-          std::memcpy(&v, &logical[pos + k], 4);
-          columns[s].push_back(v);
-        } else {
-          double v;
-          std::memcpy(&v, &logical[pos + k], 8);
-          columns[s].push_back(v);
-        }
-      }
-      pos += n;
-    }
-    at += std::uint64_t(length) + 1;
-  }
-  for (std::uint64_t r = 0; r < count && r < columns[0].size(); ++r) {
-    std::vector<double> record;
-    for (const auto& c : columns) record.push_back(r < c.size() ? c[r] : NAN);
-    out.records.push_back(record);
-  }
-  return out;
-}
 
 // A 6 x 8 grid and 5 more points in a list (second returns): no grid in the file, every field a
 // Float. Times 0.25 ms apart from `first`, in `base`.
@@ -141,17 +65,18 @@ TEST(E57Time, GpsTimesAreTimeStampsFromTheScansAcquisitionStart) {
   const Scan scan = TimedScan(first, kAdjustedGpsTime);
   ASSERT_TRUE(WriteE57(dir / "t.e57", {scan}, progress, cancel).ok());
 
-  const Decoded d = DecodeBySpecification(ReadBytes(dir / "t.e57"));
-  ASSERT_TRUE(d.has_start);
-  EXPECT_EQ(d.start, std::floor(first) + 1e9);  // a whole GPS second at or before the first point
-  const int x = d.Field("cartesianX"), y = d.Field("cartesianY"), z = d.Field("cartesianZ"), t = d.Field("timeStamp");
-  ASSERT_GE(t, 0);
+  const test::E57BySpecification d = test::DecodeE57BySpecification(ReadBytes(dir / "t.e57"));
+  ASSERT_TRUE(d.acquisition_start);
+  EXPECT_EQ(*d.acquisition_start, std::floor(first) + 1e9);  // a whole GPS second at or before the first point
+  const auto &x = d.Field("cartesianX"), &y = d.Field("cartesianY"), &z = d.Field("cartesianZ"), &t = d.Field("timeStamp");
   const auto truth = TimesByPoint(scan);
-  ASSERT_EQ(d.records.size(), truth.size());
+  ASSERT_EQ(d.records, truth.size());
+  ASSERT_EQ(t.size(), truth.size());
+  ASSERT_EQ(x.size(), truth.size());
   int wrong = 0;
-  for (const auto& r : d.records) {
-    const auto it = truth.find({float(r[x]), float(r[y]), float(r[z])});
-    wrong += it == truth.end() || !(std::abs(d.start + r[t] - 1e9 - it->second) < 1e-6);
+  for (std::size_t r = 0; r < t.size(); ++r) {
+    const auto it = truth.find({float(x[r]), float(y[r]), float(z[r])});
+    wrong += it == truth.end() || !(std::abs(*d.acquisition_start + t[r] - 1e9 - it->second) < 1e-6);
   }
   EXPECT_EQ(wrong, 0);
 
@@ -176,8 +101,9 @@ TEST(E57Time, TimesWithoutADateAreWrittenAsTheyAre) {
   CancelToken cancel;
   const Scan scan = TimedScan(86400.0 * 3 + 0.125, kGpsWeekSeconds);
   ASSERT_TRUE(WriteE57(dir / "w.e57", {scan}, progress, cancel).ok());
-  const Decoded d = DecodeBySpecification(ReadBytes(dir / "w.e57"));
-  EXPECT_FALSE(d.has_start);  // week seconds name no week: no date to give
+  const test::E57BySpecification d = test::DecodeE57BySpecification(ReadBytes(dir / "w.e57"));
+  EXPECT_FALSE(d.acquisition_start);
+  EXPECT_EQ(d.Field("timeStamp").size(), TimesByPoint(scan).size());  // week seconds name no week: no date to give
   Expected<std::vector<Scan>> back = ReadE57(dir / "w.e57", {}, progress, cancel);
   ASSERT_TRUE(back.ok()) << back.error().ToString();
   EXPECT_EQ(back->front().time_base, kE57ScanSeconds);
