@@ -6,7 +6,9 @@
 
 #include <fstream>
 
+#include "core/common/log.h"
 #include "core/geometry/transform.h"
+#include "core/io/las_reader.h"
 #include "core/io/scan_file.h"
 #include "core/pipeline/create_project.h"
 #include "core/pipeline/project_scans.h"
@@ -88,6 +90,46 @@ TEST_P(ExportCloudsTest, KeptPosesReadBackEqualAndAppliedPosesPutPointsAtTheTrut
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, ExportCloudsTest, ::testing::Values("ptx", "ply", "e57"));
+
+// LAS names two time bases only (GPS week seconds, adjusted standard GPS time): a scan whose times
+// count from something else (a PLY's time without a base) is exported with its times as they are
+// and a warning that names the file, the scan and what keeps the base; a LAS base gives none.
+TEST(ExportClouds, LasSaysWhenItCannotNameTheTimeBase) {
+  test::TempDir dir;
+  io::Project project = TrueProject(dir / "p");
+  NullProgress progress;
+  CancelToken cancel;
+  auto scans = LoadProjectScans(project, progress, cancel);
+  ASSERT_TRUE(scans.ok()) << scans.error().ToString();
+  Scan timed = (*scans)[0];
+  timed.AddTime();
+  for (std::size_t i = 0; i < timed.size(); ++i) timed.time[i] = 0.001 * double(i);
+  for (const std::string base : {std::string(), std::string(io::kGpsWeekSeconds)}) {
+    SCOPED_TRACE(base.empty() ? "no base" : base);
+    timed.time_base = base;
+    const std::filesystem::path file = dir / (base.empty() ? "timed.ply" : "week.ply");
+    ASSERT_TRUE(io::WriteScanFile(file, {timed}, progress, cancel).ok());
+    project.scans[0].path = file;
+    std::vector<std::string> warnings;
+    SetLogHandler([&](LogLevel level, const std::string& m) {
+      if (level == LogLevel::kWarning) warnings.push_back(m);
+    });
+    ExportCloudsOptions options;
+    options.dir = dir / (base.empty() ? "las" : "las_week");
+    options.format = "las";
+    auto exported = ExportClouds(project, options, progress, cancel);
+    SetLogHandler({});
+    ASSERT_TRUE(exported.ok()) << exported.error().ToString();
+    int about_time = 0;
+    for (const std::string& w : warnings)
+      if (w.find("LAS cannot name") != std::string::npos) {
+        ++about_time;
+        EXPECT_NE(w.find((*exported)[0].file.filename().string()), std::string::npos) << w;
+        EXPECT_NE(w.find("an unknown base"), std::string::npos) << w;
+      }
+    EXPECT_EQ(about_time, base.empty() ? 1 : 0);
+  }
+}
 
 TEST(ExportClouds, RefusesToOverwriteInputsAndNeedsARegisteredScan) {
   test::TempDir dir;
