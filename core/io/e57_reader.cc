@@ -245,7 +245,14 @@ Expected<std::vector<Scan>> ReadE57(const std::filesystem::path& path, const E57
                                          : CloudScan(*records, desc, std::move(name), where, intensity_range);
     if (!scan) return scan.error();
     scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(records->shift);
-    if (scan->HasTime()) scan->time_base = TimeBase(desc);
+    if (scan->HasTime()) {
+      scan->time_base = TimeBase(desc);
+      const auto finite = [](const std::vector<double>& v) {
+        return std::all_of(v.begin(), v.end(), [](double t) { return std::isfinite(t); });
+      };
+      if (!finite(scan->time) || !finite(scan->list_time))
+        return MakeError(ErrorCode::kParseError, where + ": acquisitionStart + timeStamp is not a finite time; the file is damaged");
+    }
     scans.push_back(std::move(*scan));
   }
   progress.Report(1.0, "reading " + path.filename().string());

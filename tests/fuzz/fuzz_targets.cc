@@ -113,6 +113,13 @@ std::vector<FuzzTarget> MakeTargets(const fs::path& work_dir) {
 
   FuzzTarget e57{"e57", ".e57", {}, nullptr};
   e57.seeds.push_back(written("two.e57", [&](const fs::path& p) { return io::WriteE57(p, scans, progress, cancel); }));
+  {  // GPS times: a timeStamp per point from the scan's acquisitionStart
+    Scan timed = scans[0];
+    timed.AddTime();
+    for (std::size_t i = 0; i < timed.size(); ++i) timed.time[i] = 3.2e8 + 0.001 * double(i);
+    timed.time_base = io::kAdjustedGpsTime;
+    e57.seeds.push_back(written("timed.e57", [&](const fs::path& p) { return io::WriteE57(p, {timed}, progress, cancel); }));
+  }
   e57.read = [](const fs::path& f, bool* ok) {
     NullProgress progress;
     return Judge(io::ReadE57(f, io::E57ReadOptions(), progress, CancelToken()), ok, CheckScans);
