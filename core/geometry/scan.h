@@ -81,6 +81,8 @@ struct Scan {
   // Gives the scan colour: every cell and listed point black until set.
   void AddColour();
   bool HasTime() const { return !time.empty() || !list_time.empty(); }
+  // time_base for messages: quoted, or "an unknown base".
+  std::string TimeBaseText() const { return time_base.empty() ? "an unknown base" : "'" + time_base + "'"; }
   // Gives the scan times: every cell and listed point 0 until set.
   void AddTime();
 

@@ -247,11 +247,8 @@ Expected<std::vector<Scan>> ReadE57(const std::filesystem::path& path, const E57
     scan->world_from_scan = desc.world_from_scan * Eigen::Translation3d(records->shift);
     if (scan->HasTime()) {
       scan->time_base = TimeBase(desc);
-      const auto finite = [](const std::vector<double>& v) {
-        return std::all_of(v.begin(), v.end(), [](double t) { return std::isfinite(t); });
-      };
-      if (!finite(scan->time) || !finite(scan->list_time))
-        return MakeError(ErrorCode::kParseError, where + ": acquisitionStart + timeStamp is not a finite time; the file is damaged");
+      if (Status v = scan->Validate(); !v)  // acquisitionStart + timeStamp can overflow
+        return MakeError(ErrorCode::kParseError, where + ": " + v.error().message + " (acquisitionStart + timeStamp?); the file is damaged");
     }
     scans.push_back(std::move(*scan));
   }

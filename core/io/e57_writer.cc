@@ -299,9 +299,7 @@ Status WriteE57(const std::filesystem::path& path, const std::vector<Scan>& scan
     }
     total += scan.CountPoints();
     if (scan.HasTime() && scan.time_base != kAdjustedGpsTime && scan.time_base != kE57ScanSeconds)
-      LogWarning(target + ": scan '" + scan.name + "' has times in " +
-                 (scan.time_base.empty() ? std::string("an unknown base") : "'" + scan.time_base + "'") +
-                 ", which has no GPS date: they are written as E57 timeStamps without an acquisitionStart; "
+      LogWarning(target + ": scan '" + scan.name + "' has times in " + scan.TimeBaseText() + ", which has no GPS date: they are written as E57 timeStamps without an acquisitionStart; "
                  "export las or ply to keep the base");
   }
   AtomicFile file(path);

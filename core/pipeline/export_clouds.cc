@@ -64,9 +64,7 @@ Status WriteScanLas(const std::filesystem::path& path, const Scan& scan, std::ui
     // LAS's GPS time is week seconds or adjusted standard GPS time (the global encoding's bit 0); other
     // times (a PLY's without a base, an E57's without a date) go in as they are, labelled week seconds.
     if (!cloud.adjusted_gps_time && scan.time_base != io::kGpsWeekSeconds)
-      LogWarning(path.string() + ": scan '" + scan.name + "' has times in " +
-                 (scan.time_base.empty() ? std::string("an unknown base") : "'" + scan.time_base + "'") +
-                 ", which LAS cannot name: they are written as they are, in the GPS time field marked as GPS week "
+      LogWarning(path.string() + ": scan '" + scan.name + "' has times in " + scan.TimeBaseText() + ", which LAS cannot name: they are written as they are, in the GPS time field marked as GPS week "
                  "seconds; export ply or e57 to keep the base");
   }
   cloud.source_ids.assign(cloud.points.size(), source_id);  // 1-based: LAS reserves 0
