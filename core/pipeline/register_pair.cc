@@ -147,7 +147,7 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   }
   prepared->samples = ToFloat(VoxelDownsample(ValidPoints(scan), options.dense_icp.voxel_m));
   prepared->surface_options = options.dense_icp;
-  prepared->plan = MakePlanView(prepared->geometric);
+  prepared->plan = MakePlanView(prepared->geometric, scan);
   prepared->panoramic = scan.grid_from_file && FullCircle(scan.angles);
   std::vector<float> ranges;
   ranges.reserve(prepared->samples.size());
@@ -235,6 +235,26 @@ struct Hypothesis {
 // at the true pose, or posts and cars of a pose shifted along identical façades) discount less.
 double Score(const Hypothesis& h) {
   return h.evidence.overlap * std::max(0.0, 1.0 - 10.0 * h.evidence.conflict) * (1.0 - h.evidence.moving);
+}
+
+// Another distinct pose that fits the surfaces as a link would need to: enough overlap, a low RMS
+// and no free-space conflict, static or object-sized. For a pose without feature support the
+// overlap cannot rank two such poses: it favours the pose that puts the scanners nearer each other,
+// whose dense near surfaces then cover each other (measured on an office floor, corridor stations
+// 10.6 m apart: 47 % overlap for the corridor turned 180° about its middle, 21 % at the truth, both
+// without conflict; issue 38). Null when there is none.
+const Hypothesis* OtherFittingPose(const LinkThresholds& t, const Hypothesis& best, const std::vector<Hypothesis>& hyps,
+                                   const std::vector<int>& rank, const CoarseOptions& coarse) {
+  for (int k : rank) {
+    const Hypothesis& h = hyps[k];
+    if (&h == &best || !Distinct(best.parent_from_child, h.parent_from_child, coarse)) continue;
+    io::LinkRecord l;
+    l.overlap = h.evidence.overlap;
+    l.rms_m = h.evidence.rms_m;
+    l.conflict = h.evidence.conflict;
+    if (SurfaceFailure(t, l).empty() && SurfaceWeakness(t, l).empty() && h.evidence.moving <= t.weak_conflict) return &h;
+  }
+  return nullptr;
 }
 
 // Fine registration from one coarse pose, then the shared evidence.
@@ -498,6 +518,14 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     link.reason = Format("plan-view pose without feature support, and a second pose nearly as good (score %.2f vs ",
                          Score(*rival)) +
                   Format("%.2f)", Score(best));
+  } else if (const Hypothesis* other = OtherFittingPose(options.thresholds, best, hyps, rank, options.coarse)) {
+    const Eigen::Isometry3d other_from_best = other->parent_from_child.inverse() * best.parent_from_child;
+    link.status = io::LinkStatus::kFailed;
+    link.reason = Format("plan-view pose without feature support, and a pose %.2f m away",
+                         other_from_best.translation().norm()) +
+                  Format(" and turned %.0f° fits the surfaces too", RotationAngle(other_from_best.linear()) * 180.0 / M_PI) +
+                  Format(" (overlap %.1f %% there, ", 100 * other->evidence.overlap) +
+                  Format("%.1f %% here, neither in the other scanner's free space): a symmetric or repeated layout", 100 * best.evidence.overlap);
   } else if (link.moving > options.thresholds.weak_conflict) {
     // Object-sized conflicts are traffic at the true pose, but also the posts and cars of a pose
     // turned or shifted along a symmetric street (measured: a 180° turn, 1.3 % static and 12.6 %
