@@ -21,7 +21,12 @@ struct GeometricFeatures::DescriptorIndex {
 
 namespace {
 
-constexpr double kMaxLevelTiltRad = 3.0 * M_PI / 180.0;
+// Every levelled scan is levelled by the up its own walls and ground give, not by its z axis, so a
+// tripod set up without a compensator (a few degrees off) is levelled as well as one with: a busy
+// street with stations tilted up to 5° went from 2, 2, 2 scans of 6 registered to 4, 6, 5 when its
+// scans got plan views and the levelled solver (issue 37). Beyond 10°, the 15° bands that sort the
+// normals into ground and walls, first taken about z, no longer hold.
+constexpr double kMaxLevelTiltRad = 10.0 * M_PI / 180.0;
 
 // Up from the normals: the direction most perpendicular to the walls (normals within 15° of
 // horizontal) and most parallel to the ground (within 15° of vertical), refined from z.
