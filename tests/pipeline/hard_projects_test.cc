@@ -118,8 +118,8 @@ TEST(HardProjects, StreetWithTraffic) {
 // Issue 37: the hard conditions together. A busy street 12 m apart: 6 vehicles and 12 pedestrians
 // anew in every scan, angle noise, range noise growing with range. Fine FPFH (0.17 m here) and SIFT
 // find almost no agreeing correspondences between stations this far apart, and the plan-view poses
-// alone are too weak beside the traffic (2 of 6 scans by default); FPFH at a coarse scale (3 voxels,
-// 0.5 m: --coarse-scale 3) gives tens.
+// alone leave weak links beside the traffic (5 of 6 scans by default); FPFH at a coarse scale (3
+// voxels, 0.5 m: --coarse-scale 3) gives tens.
 RegisterOptions CoarseScale() {
   RegisterOptions o;
   o.geometric.coarse_scale = 3.0;
