@@ -27,6 +27,12 @@ std::vector<double> HeadingHistogram(const std::vector<double>& azimuth) {
   return s;
 }
 
+// Peak position between three neighbouring samples, in samples from the centre one (parabola).
+double SubCell(double left, double centre, double right) {
+  const double d = left - 2.0 * centre + right;
+  return std::abs(d) < 1e-12 ? 0.0 : std::clamp(0.5 * (left - right) / d, -0.5, 0.5);
+}
+
 // Shifts of the child histogram (in bins, to a fraction of one: a tenth of a degree turns a wall
 // 30 m away by 5 cm) that best match the parent's, strongest first.
 std::vector<double> HeadingPeaks(const std::vector<double>& parent, const std::vector<double>& child, int count) {
@@ -40,9 +46,7 @@ std::vector<double> HeadingPeaks(const std::vector<double>& parent, const std::v
     for (int s = 0; s < kHeadingBins; ++s)
       if (!taken[s] && (best < 0 || corr[s] > corr[best])) best = s;
     if (best < 0 || !(corr[best] > 0)) break;
-    const double left = corr[(best + kHeadingBins - 1) % kHeadingBins], right = corr[(best + 1) % kHeadingBins];
-    const double curvature = left - 2.0 * corr[best] + right;
-    peaks.push_back(best + (std::abs(curvature) < 1e-12 ? 0.0 : std::clamp(0.5 * (left - right) / curvature, -0.5, 0.5)));
+    peaks.push_back(best + SubCell(corr[(best + kHeadingBins - 1) % kHeadingBins], corr[best], corr[(best + 1) % kHeadingBins]));
     for (int d = -8; d <= 8; ++d) taken[(best + d + kHeadingBins) % kHeadingBins] = 1;  // ±4°
   }
   return peaks;
@@ -152,12 +156,6 @@ void AddScanWalls(const Scan& scan, const Eigen::Isometry3d& level, const PlanOp
 }
 
 double Wrap(int k, int size) { return k > size / 2 ? k - size : k; }
-
-// Sub-cell peak position along one axis from three samples (parabola).
-double SubCell(float left, float centre, float right) {
-  const double d = left - 2.0 * centre + right;
-  return std::abs(d) < 1e-12 ? 0.0 : std::clamp(0.5 * (left - right) / d, -0.5, 0.5);
-}
 
 }  // namespace
 
