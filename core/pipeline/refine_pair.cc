@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/pipeline/fine_align.h"
 #include "core/pipeline/scale_defaults.h"
@@ -98,6 +99,32 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     } else if (!fine->converged) {
       link.status = io::LinkStatus::kWeak;
       link.reason = "the fine step stopped at its iteration cap before converging";
+    }
+    // Never worse than the start (issue 33): a refinement that ends weak or failed, fitting worse
+    // than its start (a higher RMS over the overlap, and no fewer points in free space), keeps the
+    // start, judged on its own evidence (measured on an office floor: a room station seen through
+    // a door, refined from its registered pose, slid 2.2 deg and 75 mm to double its overlap, RMS
+    // 10.4 -> 24.5 mm).
+    if (link.status != io::LinkStatus::kOk && e.unavailable.empty() && fine->iterations > 0) {
+      const AlignmentEvidence e0 = EvaluateAlignment(parent, child, initial, evidence_m);
+      if (e0.unavailable.empty() && e0.overlap > 0 && e0.rms_m < e.rms_m &&
+          !FreeSpaceRefutes(e.ViolationRate(), e0.ViolationRate())) {
+        link.parent_from_child = initial;
+        link.overlap = e0.overlap;
+        link.rms_m = e0.rms_m;
+        link.conflict = e0.conflict;
+        link.moving = e0.moving;
+        link.method += Format(" (start kept: refined, RMS %.1f mm)", 1e3 * e.rms_m, 0.0);
+        link.status = io::LinkStatus::kOk;
+        link.reason.clear();
+        if (!(reason = SurfaceFailure(t, link)).empty()) {
+          link.status = io::LinkStatus::kFailed;
+          link.reason = reason;
+        } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
+          link.status = io::LinkStatus::kWeak;
+          link.reason = reason;
+        }
+      }
     }
   }
   if (cancel.IsCancelled()) {

@@ -214,7 +214,13 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
   const PairFreeSpace f = PairFreeSpaceCheck(**a, **b, parent_from_child, free_space);
   e.conflict = f.conflict();
   e.moving = f.moving();
+  e.violations = f.a_sees_b.violations + f.b_sees_a.violations;
+  e.tested = f.a_sees_b.tested + f.b_sees_a.tested;
   return e;
+}
+
+bool FreeSpaceRefutes(double rate_kept, double rate_other) {
+  return rate_other >= 3.0 * rate_kept && rate_other - rate_kept >= kClearViolationRate;
 }
 
 namespace {
@@ -228,6 +234,7 @@ struct Hypothesis {
   Eigen::Isometry3d parent_from_child = Eigen::Isometry3d::Identity();
   AlignmentEvidence evidence;
   int iterations = 0;
+  bool screened_only = false;  // from the short screening ICP alone
 };
 
 // Overlap, discounted by free-space conflicts: a pose that puts points where the other scanner
@@ -235,6 +242,20 @@ struct Hypothesis {
 // at the true pose, or posts and cars of a pose shifted along identical façades) discount less.
 double Score(const Hypothesis& h) {
   return h.evidence.overlap * std::max(0.0, 1.0 - 10.0 * h.evidence.conflict) * (1.0 - h.evidence.moving);
+}
+
+// A pose that fits the surfaces as a link needs to at least: no surface failure, enough overlap.
+bool Fits(const LinkThresholds& t, const Hypothesis& h) {
+  io::LinkRecord l;
+  l.overlap = h.evidence.overlap;
+  l.rms_m = h.evidence.rms_m;
+  l.conflict = h.evidence.conflict;
+  return SurfaceFailure(t, l).empty() && l.overlap >= t.weak_overlap;
+}
+
+double ViolationRate(const Hypothesis& h) { return h.evidence.ViolationRate(); }
+bool FreerThan(const Hypothesis& a, const Hypothesis& b) {
+  return FreeSpaceRefutes(a.evidence.ViolationRate(), b.evidence.ViolationRate());
 }
 
 // Another distinct pose that fits the surfaces as a link would need to: enough overlap, a low RMS
@@ -414,15 +435,29 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
       for (const Hypothesis& o : hyps) top = std::max(top, Score(o));
       if (Score(h) >= 0.5 * options.coarse.ambiguity_ratio * top) {
         h = Refine(parent, child, sift_corr, h.parent_from_child, threshold, angular, options, cancel);
+      } else {
+        h.screened_only = true;
       }
     }
     hyps.push_back(h);
     hyp_from_plan.push_back(st.from_plan);
   }
   if (cancel.IsCancelled()) return fail("cancelled");
-  std::vector<int> rank(hyps.size());
-  for (std::size_t i = 0; i < rank.size(); ++i) rank[i] = static_cast<int>(i);
-  std::stable_sort(rank.begin(), rank.end(), [&](int a, int b) { return Score(hyps[a]) > Score(hyps[b]); });
+  // Best score first; poses that free space rules out (FreerThan) are neither chosen nor rivals. A
+  // pose only screened that free space puts first is refined in full, and the poses ranked again.
+  std::vector<int> rank;
+  while (true) {  // ends: each pass refines a pose only screened, or stops
+    rank.clear();
+    for (std::size_t k = 0; k < hyps.size(); ++k) {
+      bool ruled_out = false;
+      for (const Hypothesis& other : hyps) ruled_out |= Fits(options.thresholds, other) && FreerThan(other, hyps[k]);
+      if (!ruled_out) rank.push_back(static_cast<int>(k));
+    }
+    std::stable_sort(rank.begin(), rank.end(), [&](int a, int b) { return Score(hyps[a]) > Score(hyps[b]); });
+    Hypothesis& first = hyps[rank[0]];
+    if (!first.screened_only) break;
+    first = Refine(parent, child, sift_corr, first.parent_from_child, threshold, angular, options, cancel);
+  }
   const Hypothesis& best = hyps[rank[0]];
   if (!best.evidence.unavailable.empty()) return fail(best.evidence.unavailable);
   const bool best_from_plan = hyp_from_plan[rank[0]];
@@ -437,6 +472,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
   link.rms_m = best.evidence.rms_m;
   link.conflict = best.evidence.conflict;
   link.moving = best.evidence.moving;
+  result.violation_rate = best.evidence.ViolationRate();
   const std::vector<int> geometric_consistent = ConsistentIndices(geometric_corr, best.parent_from_child, threshold);
   link.consistent = static_cast<int>(ConsistentIndices(sift_corr, best.parent_from_child, threshold, angular).size() +
                                      geometric_consistent.size());  // FPFH: their own tolerances
@@ -499,7 +535,8 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
       link.reason = Format("both scanners at one spot (%.2f m apart): a repeated room or corridor fits itself "
                            "there — keep the link by hand if both scans were taken there",
                            apart_m);
-      result.same_spot = true;
+      // A look-alike spot that free space refutes is no twin (FreeSpaceRefutes).
+      result.same_spot = ViolationRate(best) < kClearViolationRate;
     }
     return finish();
   }
@@ -535,6 +572,14 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
                          "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop confirms it",
                          100 * link.moving);
     result.needs_loop = true;
+  } else if (SameSpot(parent, child, best.parent_from_child, 0.2) && ViolationRate(best) >= kClearViolationRate) {
+    // A look-alike spot that free space refutes (FreeSpaceRefutes) is no twin: measured on an
+    // office floor, corridor stations on each other's spots left 0.57-1.71 % of the samples in free
+    // space (the corridor's far ends, the rooms seen through the doors), true poses 0.01-0.05 %.
+    link.status = io::LinkStatus::kFailed;
+    link.reason = Format("plan-view pose without feature support that puts both scanners at one spot (%.2f m apart) "
+                         "with %.2f %% of the samples in the other scanner's free space: a repeated corridor or room",
+                         best.parent_from_child.translation().norm(), 100 * ViolationRate(best));
   } else if (SameSpot(parent, child, best.parent_from_child, 0.2)) {
     // A corridor or a row of rooms fits itself at its own spot, turned 180° or slid by a door
     // (measured: an office floor's end stations, 24.7 m apart, placed on each other with 82 %

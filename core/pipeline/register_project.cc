@@ -325,6 +325,10 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
     return RegisterPair(prepared[parent], prepared[child], sift_of(parent, child), geometric_of(parent, child),
                         options, cancel);
   };
+  source.violation_rate = [&](int parent, int child, const Eigen::Isometry3d& parent_from_child) {
+    return EvaluateAlignment(prepared[parent], prepared[child], parent_from_child, options.overlap_distance_m)
+        .ViolationRate();
+  };
   // The pairs overlapping at the registered poses (whether matched or not) become links of the global
   // step, refined from those poses: bounding spheres first, then SampleOverlap on the voxel samples
   // within 3 overlap distances (the samples are a voxel of one overlap distance apart). One parent at

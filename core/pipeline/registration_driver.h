@@ -27,6 +27,9 @@ struct LinkSource {
   int min_weight = 1;
   // Registers child to parent (called at most once per ordered pair).
   std::function<PairResult(int parent, int child)> register_pair;
+  // The free-space violation rate of a pair at a pose (AlignmentEvidence::ViolationRate), to test
+  // a look-alike scan in a link's place (tree_walk.h). Empty: look-alikes are not tested.
+  std::function<double(int parent, int child, const Eigen::Isometry3d& parent_from_child)> violation_rate;
   const char* verb = "registering";  // progress: "registering s02 to s01"
   // Loop checks (beyond W): each tree link is also verified against the child's best other
   // neighbour by weight (min_check_weight or more); a loop that does not close fails both links.

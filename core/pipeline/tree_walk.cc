@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <tuple>
 
 #include "core/common/log.h"
 #include "core/geometry/transform.h"
@@ -203,6 +205,15 @@ class Walker {
       char buf[200];
       std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans_[parent].name.c_str(),
                     scans_[child].name.c_str(), scans_[best].name.c_str(), gap.position_m, gap.angle_rad * 180 / M_PI);
+      // A check that itself needs a loop cannot fail a sound link: it is the suspect, and fails
+      // alone (measured on an office floor: a corridor pose turned 180°, weak for its object-sized
+      // conflicts, failed the true link it checked).
+      if (!needs_loop && check.NeedsLoop()) {
+        const int check_parent = use_reverse ? child : best, check_child = use_reverse ? best : child;
+        LogWarning(std::string(buf) + "; the check, which needed a loop itself, failed");
+        book_.Fail(check_parent, check_child, std::string(buf) + "; this link needed a loop itself");
+        continue;
+      }
       // Both links are failed — unless only the link checked needs a loop: then it is the suspect,
       // and the sound check stays (it may place the child once the suspect is gone).
       const bool only_suspect = needs_loop && !check.NeedsLoop();
@@ -285,15 +296,48 @@ class Walker {
   }
 
   // A scan some pair put on another scan's spot (PairResult::same_spot) looks the same from there:
-  // that other scan, or -1 (the tree link's parent aside).
-  int Twin(int parent, int child) const {
+  // that other scan (the twin), or -1. `alike` is the link's parent or child; a twin that free space
+  // refutes in its place on the link does not count (TwinRefuted).
+  int Twin(int parent, int child, int alike) const {
     for (int q = 0; q < n_; ++q) {
       if (q == child || q == parent) continue;
-      const PairResult* a = book_.Find(q, child);
-      const PairResult* b = book_.Find(child, q);
-      if ((a && a->same_spot) || (b && b->same_spot)) return q;
+      const PairResult* a = book_.Find(q, alike);
+      const PairResult* b = book_.Find(alike, q);
+      if (!(a && a->same_spot) && !(b && b->same_spot)) continue;
+      const Eigen::Isometry3d alike_from_q =
+          b && b->same_spot ? b->link.parent_from_child : a->link.parent_from_child.inverse();
+      if (!TwinRefuted(parent, child, alike, q, alike_from_q)) return q;
     }
     return -1;
+  }
+
+  // Whether free space refutes twin q in the place of `alike` on the link parent -> child: the twin
+  // put there (alike_from_q, its look-alike pose) leaves clearly more points in the other scanner's
+  // free space than the link's own scan (FreeSpaceRefutes). Then the link's evidence is its scan's
+  // own (measured on an office floor whose corridor ends look alike: each end station's link to its
+  // neighbour, 8 m apart, refuted the other end station in its place by the furniture of the rooms
+  // they see through the doors).
+  bool TwinRefuted(int parent, int child, int alike, int q, const Eigen::Isometry3d& alike_from_q) const {
+    if (!source_.violation_rate) return false;
+    const auto key = std::make_tuple(parent, child, q);
+    auto it = twin_rates_.find(key);
+    if (it == twin_rates_.end()) {
+      const Eigen::Isometry3d& link = book_.At(parent, child).link.parent_from_child;
+      const double rate = alike == child ? source_.violation_rate(parent, q, link * alike_from_q)
+                                         : source_.violation_rate(q, child, alike_from_q.inverse() * link);
+      it = twin_rates_.emplace(key, rate).first;
+      const double own = book_.At(parent, child).violation_rate;
+      if (FreeSpaceRefutes(own, rate)) {
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "%s -> %s: %s looks the same from the spot of %s, but %s in its place leaves %.2f %% of the "
+                      "samples in free space against %.2f %%: the link is %s's own",
+                      scans_[parent].name.c_str(), scans_[child].name.c_str(), scans_[alike].name.c_str(),
+                      scans_[q].name.c_str(), scans_[q].name.c_str(), 100 * rate, 100 * own, scans_[alike].name.c_str());
+        LogInfo(buf);
+      }
+    }
+    return FreeSpaceRefutes(book_.At(parent, child).violation_rate, it->second);
   }
 
   // Whether the tree link needs a loop: its own evidence says so, or its child has a twin — a room
@@ -312,9 +356,9 @@ class Walker {
   // The scan of the link that has a twin, and the twin: the child's first, then — for a pose on the
   // surfaces alone — the parent's; {-1, -1} when neither counts.
   std::pair<int, int> AlikeScan(int parent, int child) const {
-    if (const int twin = Twin(parent, child); twin >= 0) return {child, twin};
+    if (const int twin = Twin(parent, child, child); twin >= 0) return {child, twin};
     if (book_.At(parent, child).surfaces_only)
-      if (const int twin = Twin(child, parent); twin >= 0) return {parent, twin};
+      if (const int twin = Twin(parent, child, parent); twin >= 0) return {parent, twin};
     return {-1, -1};
   }
 
@@ -328,6 +372,7 @@ class Walker {
   const bool priors_;
   std::vector<bool> position_tried_;
   TreeWalk walk_;
+  mutable std::map<std::tuple<int, int, int>, double> twin_rates_;  // TwinRefuted: (parent, child, twin) -> rate
 };
 
 }  // namespace

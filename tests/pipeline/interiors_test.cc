@@ -30,15 +30,20 @@ std::vector<Scan> SimulateOffice(SceneOptions::Kind kind, std::uint64_t seed, do
   return scans.ok() ? std::move(*scans) : std::vector<Scan>{};
 }
 
-void ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed, double spacing_m = 8.0) {
+// Returns how many scans were registered (each checked against the truth).
+int ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed, double spacing_m = 8.0) {
   const std::vector<Scan> scans = SimulateOffice(kind, seed, spacing_m);
-  ASSERT_EQ(scans.size(), 8u);
+  EXPECT_EQ(scans.size(), 8u);
+  if (scans.size() != 8u) return 0;
   NullProgress progress;
   CancelToken cancel;
   Expected<ProjectRegistration> r = RegisterScans(scans, {}, RegisterOptions{}, progress, cancel);
-  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  EXPECT_TRUE(r.ok()) << r.error().ToString();
+  if (!r.ok()) return 0;
   const std::vector<ReferenceError> errors = ReferenceErrors(*r, scans);
+  int registered = 0;
   for (std::size_t i = 0; i < scans.size(); ++i) {
+    registered += r->scans[i].registered;
     if (!r->scans[i].registered) {
       EXPECT_FALSE(r->scans[i].reason.empty()) << scans[i].name << " left out without a reason";
       continue;
@@ -57,6 +62,7 @@ void ExpectNothingWrong(SceneOptions::Kind kind, std::uint64_t seed, double spac
     EXPECT_LE(e.angle_rad * kDeg, 0.2) << l.parent << "-" << l.child;
   }
   EXPECT_GE(aliased, 1) << "the floor gave no wrong pair pose: the test would prove nothing";
+  return registered;
 }
 
 // Same-size rooms with different furniture: a room fits another room turned 180° with 9-12
@@ -72,9 +78,15 @@ TEST(Interiors, NoScanOfAnOfficeFloorIsPlacedWrong) {
 // turned 180° about its middle as well as the truth (seed 2: a corridor station placed 15.7 m off
 // and turned around, "ok", 47 % overlap against 21 % at the truth, no conflict at either): a
 // plan-view pose without feature support fails when another pose fits the surfaces too.
+//
+// Free space then tells those look-alike poses apart (FreeSpaceRefutes): turned 180° or slid by
+// rooms, a corridor station fits with up to twice the overlap of the truth, but leaves the far ends
+// and the furniture seen through the doors where the other scanner saw through (seed 1: 739 of
+// 49,475 samples against 15 at the truth). When the overlap ranked them, such links failed as
+// ambiguous and 2 of 8 scans were registered on each floor; now 5.
 TEST(Interiors, NoScanOfAnOfficeFloorWithStationsFiveMetresApartIsPlacedWrong) {
-  ExpectNothingWrong(SceneOptions::Kind::kOffice, 1, 5.0);
-  ExpectNothingWrong(SceneOptions::Kind::kOffice, 2, 5.0);
+  EXPECT_GE(ExpectNothingWrong(SceneOptions::Kind::kOffice, 1, 5.0), 4);
+  EXPECT_GE(ExpectNothingWrong(SceneOptions::Kind::kOffice, 2, 5.0), 4);
 }
 
 // Identical rooms and a mirror-symmetric corridor: from its twin's spot a station sees the same
