@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 
 #include "core/pipeline/fine_align.h"
 #include "core/pipeline/scale_defaults.h"
@@ -21,6 +20,28 @@ std::string Format(const char* fmt, double a, double b) {
   char buf[400];
   std::snprintf(buf, sizeof buf, fmt, a, b);
   return buf;
+}
+
+// The link's surface evidence at its pose.
+void SetEvidence(const AlignmentEvidence& e, io::LinkRecord& link) {
+  link.overlap = e.overlap;
+  link.rms_m = e.rms_m;
+  link.conflict = e.conflict;
+  link.moving = e.moving;
+}
+
+// Fails or weakens the link when its surfaces say so; true when they did.
+bool JudgeSurfaces(const LinkThresholds& t, io::LinkRecord& link) {
+  std::string reason;
+  if (!(reason = SurfaceFailure(t, link)).empty()) {
+    link.status = io::LinkStatus::kFailed;
+  } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
+    link.status = io::LinkStatus::kWeak;
+  } else {
+    return false;
+  }
+  link.reason = reason;
+  return true;
 }
 
 }  // namespace
@@ -67,12 +88,8 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
     centre /= std::max<double>(1.0, child.samples.size());
     const double moved = (link.parent_from_child * centre - initial * centre).norm();
     const AlignmentEvidence e = EvaluateAlignment(parent, child, link.parent_from_child, evidence_m);
-    link.overlap = e.overlap;
-    link.rms_m = e.rms_m;
-    link.conflict = e.conflict;
-    link.moving = e.moving;
+    SetEvidence(e, link);
     const LinkThresholds& t = options.thresholds;
-    std::string reason;
     link.status = io::LinkStatus::kOk;
     if (!e.unavailable.empty()) {
       link.status = io::LinkStatus::kFailed;
@@ -90,13 +107,7 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
           "the refinement moved the scan %.1f mm from its current pose (more than twice the overlap "
           "distance %.1f mm): diverged; correct the start pose or raise the overlap distance",
           1e3 * moved, 1e3 * options.overlap_distance_m);
-    } else if (!(reason = SurfaceFailure(t, link)).empty()) {
-      link.status = io::LinkStatus::kFailed;
-      link.reason = reason;
-    } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
-      link.status = io::LinkStatus::kWeak;
-      link.reason = reason;
-    } else if (!fine->converged) {
+    } else if (!JudgeSurfaces(t, link) && !fine->converged) {
       link.status = io::LinkStatus::kWeak;
       link.reason = "the fine step stopped at its iteration cap before converging";
     }
@@ -110,20 +121,11 @@ io::LinkRecord RefinePair(const PreparedScan& parent, const PreparedScan& child,
       if (e0.unavailable.empty() && e0.overlap > 0 && e0.rms_m < e.rms_m &&
           !FreeSpaceRefutes(e.ViolationRate(), e0.ViolationRate())) {
         link.parent_from_child = initial;
-        link.overlap = e0.overlap;
-        link.rms_m = e0.rms_m;
-        link.conflict = e0.conflict;
-        link.moving = e0.moving;
+        SetEvidence(e0, link);
         link.method += Format(" (start kept: refined, RMS %.1f mm)", 1e3 * e.rms_m, 0.0);
         link.status = io::LinkStatus::kOk;
         link.reason.clear();
-        if (!(reason = SurfaceFailure(t, link)).empty()) {
-          link.status = io::LinkStatus::kFailed;
-          link.reason = reason;
-        } else if (!(reason = SurfaceWeakness(t, link)).empty()) {
-          link.status = io::LinkStatus::kWeak;
-          link.reason = reason;
-        }
+        JudgeSurfaces(t, link);
       }
     }
   }

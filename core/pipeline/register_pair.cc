@@ -253,7 +253,6 @@ bool Fits(const LinkThresholds& t, const Hypothesis& h) {
   return SurfaceFailure(t, l).empty() && l.overlap >= t.weak_overlap;
 }
 
-double ViolationRate(const Hypothesis& h) { return h.evidence.ViolationRate(); }
 bool FreerThan(const Hypothesis& a, const Hypothesis& b) {
   return FreeSpaceRefutes(a.evidence.ViolationRate(), b.evidence.ViolationRate());
 }
@@ -536,7 +535,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
                            "there — keep the link by hand if both scans were taken there",
                            apart_m);
       // A look-alike spot that free space refutes is no twin (FreeSpaceRefutes).
-      result.same_spot = ViolationRate(best) < kClearViolationRate;
+      result.same_spot = best.evidence.ViolationRate() < kClearViolationRate;
     }
     return finish();
   }
@@ -572,14 +571,14 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
                          "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop confirms it",
                          100 * link.moving);
     result.needs_loop = true;
-  } else if (SameSpot(parent, child, best.parent_from_child, 0.2) && ViolationRate(best) >= kClearViolationRate) {
+  } else if (SameSpot(parent, child, best.parent_from_child, 0.2) && best.evidence.ViolationRate() >= kClearViolationRate) {
     // A look-alike spot that free space refutes (FreeSpaceRefutes) is no twin: measured on an
     // office floor, corridor stations on each other's spots left 0.57-1.71 % of the samples in free
     // space (the corridor's far ends, the rooms seen through the doors), true poses 0.01-0.05 %.
     link.status = io::LinkStatus::kFailed;
     link.reason = Format("plan-view pose without feature support that puts both scanners at one spot (%.2f m apart) "
                          "with %.2f %% of the samples in the other scanner's free space: a repeated corridor or room",
-                         best.parent_from_child.translation().norm(), 100 * ViolationRate(best));
+                         best.parent_from_child.translation().norm(), 100 * best.evidence.ViolationRate());
   } else if (SameSpot(parent, child, best.parent_from_child, 0.2)) {
     // A corridor or a row of rooms fits itself at its own spot, turned 180° or slid by a door
     // (measured: an office floor's end stations, 24.7 m apart, placed on each other with 82 %

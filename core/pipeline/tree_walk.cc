@@ -320,24 +320,24 @@ class Walker {
   bool TwinRefuted(int parent, int child, int alike, int q, const Eigen::Isometry3d& alike_from_q) const {
     if (!source_.violation_rate) return false;
     const auto key = std::make_tuple(parent, child, q);
-    auto it = twin_rates_.find(key);
-    if (it == twin_rates_.end()) {
-      const Eigen::Isometry3d& link = book_.At(parent, child).link.parent_from_child;
-      const double rate = alike == child ? source_.violation_rate(parent, q, link * alike_from_q)
-                                         : source_.violation_rate(q, child, alike_from_q.inverse() * link);
-      it = twin_rates_.emplace(key, rate).first;
-      const double own = book_.At(parent, child).violation_rate;
-      if (FreeSpaceRefutes(own, rate)) {
-        char buf[400];
-        std::snprintf(buf, sizeof buf,
-                      "%s -> %s: %s looks the same from the spot of %s, but %s in its place leaves %.2f %% of the "
-                      "samples in free space against %.2f %%: the link is %s's own",
-                      scans_[parent].name.c_str(), scans_[child].name.c_str(), scans_[alike].name.c_str(),
-                      scans_[q].name.c_str(), scans_[q].name.c_str(), 100 * rate, 100 * own, scans_[alike].name.c_str());
-        LogInfo(buf);
-      }
+    if (const auto it = twin_refuted_.find(key); it != twin_refuted_.end()) return it->second;
+    const PairResult& link = book_.At(parent, child);
+    const Eigen::Isometry3d& pose = link.link.parent_from_child;
+    const double rate = alike == child ? source_.violation_rate(parent, q, pose * alike_from_q)
+                                       : source_.violation_rate(q, child, alike_from_q.inverse() * pose);
+    const bool refuted = FreeSpaceRefutes(link.violation_rate, rate);
+    twin_refuted_.emplace(key, refuted);
+    if (refuted) {
+      char buf[400];
+      std::snprintf(buf, sizeof buf,
+                    "%s -> %s: %s looks the same from the spot of %s, but %s in its place leaves %.2f %% of the "
+                    "samples in free space against %.2f %%: the link is %s's own",
+                    scans_[parent].name.c_str(), scans_[child].name.c_str(), scans_[alike].name.c_str(),
+                    scans_[q].name.c_str(), scans_[q].name.c_str(), 100 * rate, 100 * link.violation_rate,
+                    scans_[alike].name.c_str());
+      LogInfo(buf);
     }
-    return FreeSpaceRefutes(book_.At(parent, child).violation_rate, it->second);
+    return refuted;
   }
 
   // Whether the tree link needs a loop: its own evidence says so, or its child has a twin — a room
@@ -372,7 +372,7 @@ class Walker {
   const bool priors_;
   std::vector<bool> position_tried_;
   TreeWalk walk_;
-  mutable std::map<std::tuple<int, int, int>, double> twin_rates_;  // TwinRefuted: (parent, child, twin) -> rate
+  mutable std::map<std::tuple<int, int, int>, bool> twin_refuted_;  // TwinRefuted by (parent, child, twin)
 };
 
 }  // namespace
