@@ -15,30 +15,26 @@
 namespace scanreg {
 namespace {
 
-// PCA normals over k nearest samples; zero vector where the neighbourhood is not planar.
-std::vector<Eigen::Vector3d> Normals(const std::vector<Eigen::Vector3d>& pts, const PointIndex& index, int k,
-                                     double max_variation) {
-  std::vector<Eigen::Vector3d> normals(pts.size(), Eigen::Vector3d::Zero());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (long i = 0; i < static_cast<long>(pts.size()); ++i) {
-    const std::vector<int> nn = index.KNearest(pts[i], k);
-    if (nn.size() < 5) continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int j : nn) mean += pts[j];
-    mean /= static_cast<double>(nn.size());
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (int j : nn) cov += (pts[j] - mean) * (pts[j] - mean).transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-    const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
-    const double total = ev.sum();
-    if (!(total > 0.0) || ev(0) / total > max_variation) continue;
-    normals[i] = eig.eigenvectors().col(0);
-  }
-  return normals;
+// PCA normal over the k nearest samples of point i; zero vector where the neighbourhood is not planar.
+Eigen::Vector3d PcaNormal(const std::vector<Eigen::Vector3d>& pts, const PointIndex& index, long i, int k,
+                          double max_variation) {
+  const std::vector<int> nn = index.KNearest(pts[i], k);
+  if (nn.size() < 5) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int j : nn) mean += pts[j];
+  mean /= static_cast<double>(nn.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int j : nn) cov += (pts[j] - mean) * (pts[j] - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
+  const double total = ev.sum();
+  if (!(total > 0.0) || ev(0) / total > max_variation) return Eigen::Vector3d::Zero();
+  return eig.eigenvectors().col(0);
 }
 
 struct Pairing {
   int target = -1;  // parent sample, -1 when none within the distance
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // the target's
   double residual = 0.0;  // n . (T p - s), metres
 };
 
@@ -94,14 +90,33 @@ Expected<IcpResult> DenseIcpSamples(const std::vector<Eigen::Vector3d>& parent_s
 }
 
 IcpSurface::IcpSurface(std::vector<Eigen::Vector3d> samples, const DenseIcpOptions& options)
-    : points(std::move(samples)), index(std::make_unique<PointIndex>(points)) {
-  normals = Normals(points, *index, options.normal_neighbours, options.max_surface_variation);
+    : points(std::move(samples)),
+      index(std::make_unique<PointIndex>(points)),
+      normal_neighbours_(options.normal_neighbours),
+      max_surface_variation_(options.max_surface_variation),
+      normals_(points.size(), Eigen::Vector3d::Zero()),
+      normal_state_(std::make_unique<std::atomic<std::uint8_t>[]>(points.size())) {
+  for (std::size_t i = 0; i < points.size(); ++i) normal_state_[i].store(0, std::memory_order_relaxed);
 }
 
 IcpSurface::~IcpSurface() = default;
 
 std::size_t IcpSurface::Bytes() const {
-  return (points.capacity() + normals.capacity()) * sizeof(Eigen::Vector3d) + (index ? index->Bytes() : 0);
+  return (points.capacity() + normals_.capacity()) * sizeof(Eigen::Vector3d) + points.size() +
+         (index ? index->Bytes() : 0);
+}
+
+Eigen::Vector3d IcpSurface::Normal(int sample) const {
+  std::atomic<std::uint8_t>& state = normal_state_[sample];
+  if (state.load(std::memory_order_acquire) == 2) return normals_[sample];
+  // Two threads may both compute it (the same value); one stores it.
+  const Eigen::Vector3d n = PcaNormal(points, *index, sample, normal_neighbours_, max_surface_variation_);
+  std::uint8_t expected = 0;
+  if (state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+    normals_[sample] = n;
+    state.store(2, std::memory_order_release);
+  }
+  return n;
 }
 
 Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<Eigen::Vector3d>& child_samples,
@@ -113,7 +128,6 @@ Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<
   const std::vector<Eigen::Vector3d>& target = parent.points;
   const std::vector<Eigen::Vector3d> source = ThinEvenly(child_samples, options.max_samples);
   const PointIndex& index = *parent.index;
-  const std::vector<Eigen::Vector3d>& normals = parent.normals;
 
   IcpResult out;
   out.parent_from_child = initial_parent_from_child;
@@ -128,12 +142,14 @@ Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<
       const Eigen::Vector3d q = out.parent_from_child * source[i];
       const int j = index.Nearest(q, max_d);
       pairs[i] = Pairing{};
-      if (j < 0 || normals[j].isZero()) {
+      const Eigen::Vector3d normal = j < 0 ? Eigen::Vector3d::Zero() : parent.Normal(j);
+      if (normal.isZero()) {
         pairs[i].target = j < 0 ? -1 : -2;  // -2: within reach but no normal (counts for overlap)
         continue;
       }
       pairs[i].target = j;
-      pairs[i].residual = normals[j].dot(q - target[j]);
+      pairs[i].normal = normal;
+      pairs[i].residual = normal.dot(q - target[j]);
     }
   };
 
@@ -173,7 +189,7 @@ Expected<IcpResult> DenseIcpSurface(const IcpSurface& parent, const std::vector<
           const double u = p.residual / c;
           const double w = (1.0 - u * u) * (1.0 - u * u);
           const Eigen::Vector3d q = out.parent_from_child * source[i];
-          const Eigen::Vector3d& nrm = normals[p.target];
+          const Eigen::Vector3d& nrm = p.normal;
           Eigen::Matrix<double, 6, 1> j;
           j << q.cross(nrm), nrm;
           h += w * j * j.transpose();

@@ -1,6 +1,7 @@
 #include "core/registration/voxel_filter.h"
 
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <cstring>
 #include <unordered_map>
@@ -74,10 +75,18 @@ std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>&
   std::vector<Eigen::Vector3d> sum;
   std::vector<int> count;
   const double inv = 1.0 / voxel_m;
+  // A scan's consecutive points mostly share a voxel: the last one's slot is tried before the hash.
+  VoxelKey last_key{0, 0, 0};
+  std::size_t last_slot = std::numeric_limits<std::size_t>::max();
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     const VoxelKey key{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
                        static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    if (last_slot != std::numeric_limits<std::size_t>::max() && key == last_key) {
+      sum[last_slot] += p;
+      ++count[last_slot];
+      continue;
+    }
     auto [it, inserted] = slot.try_emplace(key, sum.size());
     if (inserted) {
       sum.push_back(p);
@@ -86,6 +95,8 @@ std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>&
       sum[it->second] += p;
       ++count[it->second];
     }
+    last_key = key;
+    last_slot = it->second;
   }
   out.resize(sum.size());
   for (std::size_t i = 0; i < sum.size(); ++i) out[i] = sum[i] / count[i];
