@@ -57,6 +57,7 @@ void PairBook::Fail(int parent, int child, const std::string& reason) {
   PairResult& r = done_.at({parent, child});
   r.link.status = io::LinkStatus::kFailed;
   r.link.reason = reason;
+  r.unconfirmed = false;
   excluded_.emplace_back(parent, child);
 }
 

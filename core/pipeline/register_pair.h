@@ -80,7 +80,11 @@ struct PairResult {
   // The pose rests on the surfaces alone (a plan-view pose that too few correspondences confirm).
   bool surfaces_only = false;
   double violation_rate = 0.0;  // the pose's free-space violation rate (AlignmentEvidence::ViolationRate)
-  bool NeedsLoop() const { return needs_loop || needs_loop_if_checkable; }
+  // Set by the tree walk: failed only because no loop confirmed it when it was a tree link (its
+  // other scans then hung below its child). It still serves as a check that needs a loop itself,
+  // whatever made it need one (its evidence, or a twin: tree_walk.cc).
+  bool unconfirmed = false;
+  bool NeedsLoop() const { return needs_loop || needs_loop_if_checkable || unconfirmed; }
 };
 
 // matches: parent's SIFT descriptors (query) matched in the child (train); geometric: FPFH matches

@@ -12,6 +12,9 @@
 namespace scanreg::pipeline {
 namespace {
 
+// Checks that need a loop themselves and close it that make a link that needs a loop confirmed.
+constexpr int kSuspectsThatConfirm = 2;
+
 Error Cancelled() { return MakeError(ErrorCode::kCancelled, "registration cancelled"); }
 
 // The scans came with poses of their own (from their files or placed by hand) when no two share one;
@@ -142,7 +145,7 @@ class Walker {
     };
     for (int q : order().order) {
       if (q == child || q == parent || order().parent[q] == child || (needs_loop && below_child(q))) continue;
-      if (book_.Excluded(q, child)) continue;
+      if (book_.Excluded(q, child) && !book_.At(q, child).unconfirmed) continue;
       const int w = std::max(walk_.weights(q, child), walk_.weights(child, q));
       if (w >= source_.min_check_weight) partners.emplace_back(-w, q);
     }
@@ -186,20 +189,27 @@ class Walker {
     if (!CheckAll() && !needs_loop && book_.At(parent, child).link.status == io::LinkStatus::kOk) return false;
     const std::vector<std::pair<int, int>> partners = CheckPartners(child);
     const std::vector<Eigen::Isometry3d>& world = walk_.world;
+    int suspects_agreeing = 0;  // checks that close the loop but need a loop themselves
     for (const auto& [neg_weight, best] : partners) {
       // A check already made the other way round serves (inverted).
+      // A check failed only for want of a loop (PairResult::unconfirmed) still serves, as one
+      // that needs a loop itself.
+      const auto serves = [](const PairResult& r) { return r.link.status != io::LinkStatus::kFailed || r.unconfirmed; };
       const PairResult* reverse = book_.Find(child, best);
-      const bool use_reverse = reverse && reverse->link.status != io::LinkStatus::kFailed;
+      const bool use_reverse = reverse && serves(*reverse);
       const PairResult& check = use_reverse ? *reverse : book_.Link(best, child);
-      if (check.link.status == io::LinkStatus::kFailed) continue;
+      if (!serves(check)) continue;
       const Eigen::Isometry3d best_from_child =
           use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
       if (!use_reverse) walk_.checked_with[child] = best;
       const PoseError gap = ComparePoses(world[best] * best_from_child, world[child]);
       if (gap.position_m <= options_.loop_tolerance_m && gap.angle_rad <= options_.loop_tolerance_rad) {
-        // A check that itself needs a loop does not confirm one: two plan-view poses from
-        // neighbouring scans agree on the same wrong street as readily as on the right one.
-        if (needs_loop && check.NeedsLoop()) continue;
+        // One check that itself needs a loop does not confirm one: two plan-view poses from
+        // neighbouring scans agree on the same wrong street as readily as on the right one. Two
+        // such checks from two more scans, placed by other links, do: three scans put this one on
+        // one spot (issue 37: a busy tilted street, a station whose four plan-view links all fit
+        // to 2 mm and all carried traffic in each other's free space stayed unregistered).
+        if (needs_loop && check.NeedsLoop() && ++suspects_agreeing < kSuspectsThatConfirm) continue;
         return false;  // closed
       }
       char buf[200];
@@ -240,6 +250,7 @@ class Walker {
               : std::string();
       book_.Fail(parent, child,
                  why.substr(0, why.find("; a loop")) + twin_note + "; no loop through another scan confirms it");
+      book_.At(parent, child).unconfirmed = true;
       return true;
     }
     if (needs_loop) {  // said once, however often the tree is walked again

@@ -40,6 +40,9 @@ struct ScriptedProject {
   // when registered to any parent in weak_parents, weak and needing a loop.
   std::map<int, Eigen::Isometry3d> wrong;
   std::set<int> weak_parents;
+  // Links (either direction) that come weak and needing a loop, at the true pose (a plan-view pose
+  // with traffic in the other scanner's free space).
+  std::set<std::pair<int, int>> suspect;
 
   std::mutex tried_mutex;  // the driver registers pairs concurrently
 
@@ -64,8 +67,14 @@ struct ScriptedProject {
       r.link.reason = "no overlap";
       return r;
     }
-    r.link.status = io::LinkStatus::kOk;
     r.link.parent_from_child = truth[parent].inverse() * truth[child];
+    if (suspect.count({std::min(parent, child), std::max(parent, child)})) {
+      r.link.status = io::LinkStatus::kWeak;
+      r.link.reason = "plan-view pose without feature support; traffic in free space; a loop confirms it";
+      r.needs_loop = true;
+      return r;
+    }
+    r.link.status = io::LinkStatus::kOk;
     return r;
   }
 
@@ -246,6 +255,33 @@ TEST(RegistrationDriver, TwoLinksThatNeedLoopsDoNotConfirmEachOther) {
   EXPECT_TRUE(p.tried.count({0, 2}) || p.tried.count({2, 0})) << "the loop was checked";
   EXPECT_TRUE(r->scans[1].registered);
   EXPECT_FALSE(r->scans[2].registered) << "placed 66 m off on two agreeing plan-view poses";
+}
+
+// Three scans that put a fourth on one spot, each by a link that needs a loop, place it (issue 37:
+// a busy street's station whose four plan-view links all carried traffic). Its links are the
+// heaviest, so the tree first hangs its neighbours below it, where they cannot confirm it: a link
+// failed only for want of a loop still serves as a check once the tree changes.
+TEST(RegistrationDriver, ThreeAgreeingLinksThatNeedLoopsPlaceAScan) {
+  ScriptedProject p({0, 10, 20, 30, 40});
+  p.reach = 25.0;
+  p.suspect = {{0, 2}, {1, 2}, {2, 3}, {2, 4}};
+  LinkSource source = p.Source({{0, 1}, {1, 2}, {2, 3}, {3, 4}, {0, 2}, {2, 4}, {1, 3}}, 0);
+  for (int q : {0, 1, 3, 4}) source.weights(q, 2) = source.weights(2, q) = 60;
+  Expected<ProjectRegistration> r = p.Drive(source);
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(r->scans[i].registered) << p.scans[i].name << ": " << r->scans[i].reason;
+    EXPECT_LT(p.Error(*r, i), 1e-6) << p.scans[i].name;
+  }
+  // With two such neighbours, two placements agree: not enough.
+  ScriptedProject q({0, 10, 20, 30});
+  q.reach = 25.0;
+  q.suspect = {{1, 2}, {2, 3}};
+  LinkSource fewer = q.Source({{0, 1}, {1, 2}, {2, 3}, {1, 3}}, 0);
+  for (int k : {1, 3}) fewer.weights(k, 2) = fewer.weights(2, k) = 60;
+  Expected<ProjectRegistration> two = q.Drive(fewer);
+  ASSERT_TRUE(two.ok()) << two.error().ToString();
+  EXPECT_FALSE(two->scans[2].registered) << "placed by two plan-view poses without a loop";
 }
 
 // A wrong plan-view link placed late in the scan order misplaces its subtree; a sound link's loop
