@@ -145,7 +145,8 @@ class Walker {
     };
     for (int q : order().order) {
       if (q == child || q == parent || order().parent[q] == child || (needs_loop && below_child(q))) continue;
-      if (book_.Excluded(q, child) && !book_.At(q, child).unconfirmed) continue;
+      const PairResult* registered = book_.Find(q, child);  // the user's rejected links are excluded unregistered
+      if (book_.Excluded(q, child) && !(registered && registered->unconfirmed)) continue;
       const int w = std::max(walk_.weights(q, child), walk_.weights(child, q));
       if (w >= source_.min_check_weight) partners.emplace_back(-w, q);
     }

@@ -43,6 +43,7 @@ struct ScriptedProject {
   // Links (either direction) that come weak and needing a loop, at the true pose (a plan-view pose
   // with traffic in the other scanner's free space).
   std::set<std::pair<int, int>> suspect;
+  std::vector<std::pair<int, int>> rejected;  // the user's rejected links (ScanOrderChoices::excluded)
 
   std::mutex tried_mutex;  // the driver registers pairs concurrently
 
@@ -95,6 +96,7 @@ struct ScriptedProject {
     ScanOrderChoices choices;
     choices.root = 0;
     choices.overrides.assign(scans.size(), std::nullopt);
+    choices.excluded = rejected;
     RegisterOptions options;
     options.global = global;
     options.verify_all_links = check_every_link;
@@ -273,6 +275,18 @@ TEST(RegistrationDriver, ThreeAgreeingLinksThatNeedLoopsPlaceAScan) {
     ASSERT_TRUE(r->scans[i].registered) << p.scans[i].name << ": " << r->scans[i].reason;
     EXPECT_LT(p.Error(*r, i), 1e-6) << p.scans[i].name;
   }
+  // The user's rejected link is neither a tree link nor a check: three others still agree.
+  ScriptedProject u({0, 10, 20, 30, 40});
+  u.reach = 25.0;
+  u.suspect = {{0, 2}, {1, 2}, {2, 3}, {2, 4}};
+  u.rejected = {{0, 2}, {2, 0}};
+  LinkSource by_user = u.Source({{0, 1}, {1, 2}, {2, 3}, {3, 4}, {0, 2}, {2, 4}, {1, 3}}, 0);
+  for (int k : {0, 1, 3, 4}) by_user.weights(k, 2) = by_user.weights(2, k) = 60;
+  Expected<ProjectRegistration> rejected = u.Drive(by_user);
+  ASSERT_TRUE(rejected.ok()) << rejected.error().ToString();
+  ASSERT_TRUE(rejected->scans[2].registered) << rejected->scans[2].reason;
+  EXPECT_LT(u.Error(*rejected, 2), 1e-6);
+  EXPECT_FALSE(u.tried.count({0, 2}) || u.tried.count({2, 0})) << "the user's rejected link was registered";
   // With two such neighbours, two placements agree: not enough.
   ScriptedProject q({0, 10, 20, 30});
   q.reach = 25.0;
