@@ -12,7 +12,8 @@
 namespace scanreg::pipeline {
 namespace {
 
-// Checks that need a loop themselves and close it that make a link that needs a loop confirmed.
+// Closing checks that need a loop themselves which together confirm a link that needs one: with
+// the link, three scans put its child on one spot (CheckLink).
 constexpr int kSuspectsThatConfirm = 2;
 
 Error Cancelled() { return MakeError(ErrorCode::kCancelled, "registration cancelled"); }
