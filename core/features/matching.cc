@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <Eigen/Core>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/flann.hpp>
 #include <string>
+
+#include "core/features/whole_dots.h"
 
 namespace scanreg {
 
@@ -16,6 +19,7 @@ struct MatchIndex::Impl {
   int flann_checks = 64;
   cv::Mat descriptors;          // N x 128 CV_32F, owned; in memory also Eigen's 128 x N column-major
   std::vector<float> sq_norms;  // kExact: |t|^2 per descriptor
+  std::vector<std::int16_t> whole;  // kExact: the descriptors as integers, when WholeDots serves
   std::unique_ptr<cv::flann::Index> flann;
 };
 
@@ -58,31 +62,53 @@ struct Best2 {
   }
 };
 
+// The descriptors as integers when the exact product can be taken in integers on this processor
+// (WholeDots), else empty: the float product then serves.
+std::vector<std::int16_t> WholeIfFast(const float* descriptors, int n) {
+  return WholeDotsAreFast() ? WholeDescriptors(descriptors, n) : std::vector<std::int16_t>{};
+}
+
 // Exact two nearest neighbours of each query in train (rows) and, when cols is not null, of each
 // train descriptor among the queries, from blocks of the matrix product T^T Q:
 // |q - t|^2 = |q|^2 + |t|^2 - 2 q.t. The float product picks the top two; their distances are then
-// recomputed directly, so d1 and d2 are exact.
-void ExactTwoWay(const float* query, int nq, const float* train, int nt, const std::vector<float>& train_norms,
+// recomputed directly, so d1 and d2 are exact. When both sides are given as whole numbers, the
+// product is taken in integers (WholeDots): the same numbers, since the float one is exact then.
+void ExactTwoWay(const float* query, const std::vector<std::int16_t>& query_whole, int nq, const float* train,
+                 const std::vector<std::int16_t>& train_whole, int nt, const std::vector<float>& train_norms,
                  std::vector<TwoNearest>* rows, std::vector<TwoNearest>* cols) {
   constexpr int kBlock = 256;  // queries per product: nt x 256 floats (7 MB for 7000 train)
+  const bool whole = !query_whole.empty() && !train_whole.empty();
   const std::vector<float> query_norms = SquaredNorms(query, nq);
   const ConstDescriptorMap t(train, kSiftDescriptorSize, nt);
   std::vector<Best2> col_best(cols ? nt : 0);
   rows->assign(nq, TwoNearest{});
   Eigen::MatrixXf dots;
+  std::vector<std::int32_t> whole_dots;
   for (int q0 = 0; q0 < nq; q0 += kBlock) {
     const int nb = std::min(kBlock, nq - q0);
-    const ConstDescriptorMap qb(query + static_cast<std::size_t>(q0) * kSiftDescriptorSize, kSiftDescriptorSize, nb);
-    dots.noalias() = t.transpose() * qb;  // nt x nb
+    if (whole) {
+      whole_dots.resize(static_cast<std::size_t>(nt) * nb);
+      WholeDots(train_whole.data(), nt, query_whole.data() + static_cast<std::size_t>(q0) * kSiftDescriptorSize, nb,
+                whole_dots.data());
+    } else {
+      const ConstDescriptorMap qb(query + static_cast<std::size_t>(q0) * kSiftDescriptorSize, kSiftDescriptorSize,
+                                  nb);
+      dots.noalias() = t.transpose() * qb;  // nt x nb
+    }
     for (int k = 0; k < nb; ++k) {
-      const float* column = dots.data() + static_cast<std::size_t>(k) * nt;
       const float qn = query_norms[q0 + k];
       Best2 best;
-      for (int j = 0; j < nt; ++j) {
-        const float d = qn + train_norms[j] - 2.f * column[j];
-        best.Add(d, j);
-        if (cols) col_best[j].Add(d, q0 + k);
-      }
+      const auto scan_column = [&](const auto* column) {
+        for (int j = 0; j < nt; ++j) {
+          const float d = qn + train_norms[j] - 2.f * static_cast<float>(column[j]);
+          best.Add(d, j);
+          if (cols) col_best[j].Add(d, q0 + k);
+        }
+      };
+      if (whole)
+        scan_column(whole_dots.data() + static_cast<std::size_t>(k) * nt);
+      else
+        scan_column(dots.data() + static_cast<std::size_t>(k) * nt);
       if (best.i2 < 0) continue;
       const float* qk = query + static_cast<std::size_t>(q0 + k) * kSiftDescriptorSize;
       TwoNearest& out = (*rows)[q0 + k];
@@ -137,8 +163,10 @@ MatchIndex::MatchIndex(const ScanFeatures& features, const MatchOptions& options
   impl_->method = options.method;
   impl_->flann_checks = options.flann_checks;
   impl_->descriptors = WrapDescriptors(features.descriptors.data(), features.size()).clone();
-  if (impl_->method == MatchMethod::kExact)
+  if (impl_->method == MatchMethod::kExact) {
     impl_->sq_norms = SquaredNorms(impl_->descriptors.ptr<float>(), impl_->descriptors.rows);
+    impl_->whole = WholeIfFast(impl_->descriptors.ptr<float>(), impl_->descriptors.rows);
+  }
   if (impl_->method == MatchMethod::kFlann && features.size() >= 2) {
     // FLANN draws its random split dimensions from cv::theRNG(), which is per thread: seeding it
     // here (and restoring it afterwards) makes the forest a function of the seed only.
@@ -163,7 +191,10 @@ std::vector<TwoNearest> MatchIndex::Search(const float* descriptors, int n) cons
   std::vector<TwoNearest> out(static_cast<std::size_t>(std::max(n, 0)));
   if (n <= 0 || size() < 2) return out;
   if (impl_->method == MatchMethod::kExact) {
-    ExactTwoWay(descriptors, n, impl_->descriptors.ptr<float>(), size(), impl_->sq_norms, &out, nullptr);
+    const std::vector<std::int16_t> query_whole =
+        impl_->whole.empty() ? std::vector<std::int16_t>{} : WholeDescriptors(descriptors, n);
+    ExactTwoWay(descriptors, query_whole, n, impl_->descriptors.ptr<float>(), impl_->whole, size(), impl_->sq_norms,
+                &out, nullptr);
     return out;
   }
   const cv::Mat query = WrapDescriptors(descriptors, n);
@@ -215,7 +246,8 @@ std::vector<FeatureMatch> MatchRatio(const ScanFeatures& query, const MatchIndex
 TwoWayMatches MatchRatioBothWays(const MatchIndex& a, const MatchIndex& b, const MatchOptions& options) {
   std::vector<TwoNearest> ab, ba;
   if (a.method() == MatchMethod::kExact && b.method() == MatchMethod::kExact && a.size() >= 2 && b.size() >= 2) {
-    ExactTwoWay(a.Descriptor(0), a.size(), b.Descriptor(0), b.size(), b.impl_->sq_norms, &ab, &ba);
+    ExactTwoWay(a.Descriptor(0), a.impl_->whole, a.size(), b.Descriptor(0), b.impl_->whole, b.size(), b.impl_->sq_norms,
+                &ab, &ba);
   } else {
     ab = b.Search(a.size() > 0 ? a.Descriptor(0) : nullptr, a.size());
     ba = a.Search(b.size() > 0 ? b.Descriptor(0) : nullptr, b.size());

@@ -25,8 +25,9 @@
 namespace scanreg {
 
 enum class MatchMethod {
-  kExact,       // exact L2 by blocked matrix product |q|^2 + |t|^2 - 2 q.t (Eigen GEMM); final d1, d2
-                // recomputed directly. One product serves both directions of a pair.
+  kExact,       // exact L2 by blocked matrix product |q|^2 + |t|^2 - 2 q.t (Eigen GEMM, or in integers
+                // for whole-number descriptors: whole_dots.h); final d1, d2 recomputed directly. One
+                // product serves both directions of a pair.
   kFlann,       // randomized KD-trees (OpenCV FLANN), approximate; index built once per scan
   kBruteForce,  // exact L2 (cv::BFMatcher knnMatch, k = 2)
 };
