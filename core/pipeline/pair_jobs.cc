@@ -67,6 +67,7 @@ json PairResultToJson(const PairResult& r) {
           {"needs_loop_if_checkable", r.needs_loop_if_checkable},
           {"same_spot", r.same_spot},
           {"surfaces_only", r.surfaces_only},
+          {"weak_support", r.weak_support},
           {"violation_rate", r.violation_rate}};
 }
 
@@ -87,6 +88,7 @@ Expected<PairResult> PairResultFromJson(const json& j, const std::string& where)
     r.needs_loop_if_checkable = j.value("needs_loop_if_checkable", false);
     r.same_spot = j.value("same_spot", false);
     r.surfaces_only = j.value("surfaces_only", false);
+    r.weak_support = j.value("weak_support", false);
     r.violation_rate = j.value("violation_rate", 0.0);
   } catch (const json::exception& e) {
     return MakeError(ErrorCode::kParseError, where + ": " + e.what());

@@ -502,6 +502,10 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
       link.status = io::LinkStatus::kWeak;
       link.reason = "features were ambiguous (" + coarse->reason + "); the surfaces decided";
     }
+    // Support near the chance model's floor: a chance consensus looks the same (real RGB-D
+    // fragments: two wrong poses with 12 and 13 consistent correspondences, a right one with 11).
+    result.weak_support = link.status == io::LinkStatus::kWeak &&
+                          (coarse->ambiguous || link.consistent < options.thresholds.weak_inliers);
     // Points in the other scanner's free space are evidence against the pose, not just a lack of
     // evidence for it: a weak link with static conflicts places a scan only when a loop through
     // other scans confirms it (issue 38: a room fits another room turned 180° with 9-12 consistent

@@ -80,6 +80,10 @@ struct PairResult {
   // The pose rests on the surfaces alone (a plan-view pose that too few correspondences confirm).
   bool surfaces_only = false;
   double violation_rate = 0.0;  // the pose's free-space violation rate (AlignmentEvidence::ViolationRate)
+  // The pose's support is near the chance model's floor (few consistent correspondences, or
+  // ambiguous features): its child is "registered" only when a loop through another scan closes on
+  // it (tree_walk.h; issue 33: "registered" means verified), else placed but not verified.
+  bool weak_support = false;
   // Set by the tree walk: failed only because no loop confirmed it when it was a tree link (its
   // other scans then hung below its child). It still serves as a check that needs a loop itself,
   // whatever made it need one (its evidence, or a twin: tree_walk.cc).

@@ -30,6 +30,9 @@ struct ScanRegistration {
   // the cluster's root scan and the pose in its frame; -1 when none.
   int cluster = -1;
   Eigen::Isometry3d cluster_from_scan = Eigen::Isometry3d::Identity();
+  // Not registered: the tree placed it, but by a weak link that no loop confirmed (or through such
+  // a scan), so its pose is not verified (issue 33); the reason says which link.
+  bool unverified = false;
   bool has_coarse = false;  // world pose from the coarse links only (W fig. 6 "after coarse")
   Eigen::Isometry3d coarse_world_from_scan = Eigen::Isometry3d::Identity();
   // The scan's share of the project's consistency (verify_poses.h) at the start poses and at its

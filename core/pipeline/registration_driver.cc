@@ -106,6 +106,20 @@ void ChainPoses(const std::vector<Scan>& scans, const TreeWalk& walk, const Clus
     s.world_from_scan = p.world_from_scan * pr.link.parent_from_child;
     s.has_coarse = p.has_coarse && pr.coarse_ok;
     if (s.has_coarse) s.coarse_world_from_scan = p.coarse_world_from_scan * pr.coarse_parent_from_child;
+    // Placed, but not verified (issue 33): by a weak link no loop confirms, or through a scan that
+    // is not verified. It stays unregistered at its start pose, and its link stays listed (weak),
+    // for the user to accept when the pose is right.
+    const bool weak = walk.unconfirmed_weak[child];
+    if (weak || p.unverified) {
+      s.registered = false;
+      s.unverified = true;
+      s.parent = -1;
+      s.world_from_scan = scans[child].world_from_scan;
+      s.has_coarse = false;
+      s.reason = weak ? "not verified: placed only by a weak link from " + scans[parent].name + " (" + pr.link.reason +
+                            "); accept the link if its pose is right"
+                      : "not verified: placed through " + scans[parent].name + ", which is not verified";
+    }
     result->links.push_back(pr.link);
   }
   for (int i = 0; i < n; ++i) {
@@ -212,14 +226,15 @@ Status RunGlobalStep(const std::vector<Scan>& scans, const ScanOrderChoices& cho
   return Status::Ok();
 }
 
-// Failed attempts join the links, and each scan left out gets its reason.
+// Failed attempts join the links, and each scan left out gets its reason (a scan placed but not
+// verified keeps the reason that says so).
 void ExplainLeftOut(const std::vector<Scan>& scans, const ScanOrderChoices& choices, const PairBook& book,
                     ProjectRegistration* result) {
   for (const auto& [key, pr] : book.done()) {
     if (pr.link.status != io::LinkStatus::kFailed) continue;
     result->links.push_back(pr.link);
     ScanRegistration& s = result->scans[key.second];
-    if (!s.registered) s.reason = "link to " + scans[key.first].name + " failed: " + pr.link.reason;
+    if (!s.registered && !s.unverified) s.reason = "link to " + scans[key.first].name + " failed: " + pr.link.reason;
   }
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const std::optional<int>& parent = choices.overrides[i];

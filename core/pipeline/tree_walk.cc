@@ -59,6 +59,8 @@ class Walker {
         n_(static_cast<int>(scans.size())), priors_(HavePriorPoses(scans)), position_tried_(n_, false) {
     walk_.world.assign(n_, Eigen::Isometry3d::Identity());
     walk_.checked_with.assign(n_, -1);
+    walk_.unconfirmed_weak.assign(n_, false);
+    closed_.assign(n_, false);
     walk_.weights = source.weights;
   }
 
@@ -79,6 +81,7 @@ class Walker {
       if (cancel_.IsCancelled()) return Cancelled();
     }
     FailUnconfirmed();
+    MarkUnconfirmedWeak();
     return walk_;
   }
 
@@ -137,6 +140,9 @@ class Walker {
     if (parent < 0 || choices_.kept.count({parent, child})) return partners;  // the user's link: never failed by a check
     const bool needs_loop = NeedsLoop(parent, child);
     if (!CheckAll() && !needs_loop && book_.At(parent, child).link.status == io::LinkStatus::kOk) return partners;
+    // A link with weak support is confirmed only by a closed loop (issue 33: "registered" means
+    // verified), so every partner is tried in turn until a check serves.
+    const bool weak = book_.At(parent, child).weak_support && book_.At(parent, child).link.status == io::LinkStatus::kWeak;
     // A loop that confirms a link leaves the child's subtree: a scan placed through the child
     // closes a loop of the subtree's own links, whatever the link to the parent is.
     auto below_child = [&](int q) {
@@ -145,14 +151,14 @@ class Walker {
       return false;
     };
     for (int q : order().order) {
-      if (q == child || q == parent || order().parent[q] == child || (needs_loop && below_child(q))) continue;
+      if (q == child || q == parent || order().parent[q] == child || ((needs_loop || weak) && below_child(q))) continue;
       const PairResult* registered = book_.Find(q, child);  // the user's rejected links are excluded unregistered
       if (book_.Excluded(q, child) && !(registered && registered->unconfirmed)) continue;
       const int w = std::max(walk_.weights(q, child), walk_.weights(child, q));
       if (w >= source_.min_check_weight) partners.emplace_back(-w, q);
     }
     std::stable_sort(partners.begin(), partners.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    if (!needs_loop && partners.size() > 1) partners.resize(1);
+    if (!needs_loop && !weak && partners.size() > 1) partners.resize(1);
     return partners;
   }
 
@@ -161,6 +167,7 @@ class Walker {
   // can be self-consistent and wrong (repeated façades), a closed loop rarely is. True when a link
   // failed (the tree must be recomputed).
   bool CheckLoops() {
+    closed_.assign(n_, false);
     std::vector<std::pair<int, int>> first_checks;  // each link's first check, unless the reverse serves
     for (int child : order().order) {
       const std::vector<std::pair<int, int>> partners = CheckPartners(child);
@@ -212,7 +219,8 @@ class Walker {
         // one spot (issue 37: a busy tilted street, a station whose four plan-view links all fit
         // to 2 mm and all carried traffic in each other's free space stayed unregistered).
         if (needs_loop && check.NeedsLoop() && ++suspects_agreeing < kSuspectsThatConfirm) continue;
-        return false;  // closed
+        closed_[child] = true;
+        return false;
       }
       char buf[200];
       std::snprintf(buf, sizeof buf, "loop %s-%s-%s does not close: %.3f m / %.2f° apart", scans_[parent].name.c_str(),
@@ -238,10 +246,7 @@ class Walker {
     // A lone pair (the child has no other candidate neighbour at all, whatever became of its links)
     // cannot close a loop: evidence against its pose leaves it weak; a plan-view pose without
     // features still fails.
-    bool lone = true;
-    for (int q = 0; q < n_ && lone; ++q)
-      lone = q == child || q == parent ||
-             std::max(walk_.weights(q, child), walk_.weights(child, q)) < source_.min_check_weight;
+    const bool lone = Lone(parent, child);
     if (needs_loop && (book_.At(parent, child).needs_loop || !lone)) {
       const std::string why = book_.At(parent, child).link.reason;
       const auto [alike, twin] = AlikeScan(parent, child);
@@ -255,12 +260,106 @@ class Walker {
       book_.At(parent, child).unconfirmed = true;
       return true;
     }
-    if (needs_loop) {  // said once, however often the tree is walked again
-      std::string& why = book_.At(parent, child).link.reason;
-      const std::string lone = "; no other scan overlaps to confirm it by a loop";
-      if (why.find(lone) == std::string::npos) why = why.substr(0, why.find("; a loop")) + lone;
+    return false;
+  }
+
+  // The child has no other candidate neighbour at all, whatever became of its links.
+  bool Lone(int parent, int child) const {
+    for (int q = 0; q < n_; ++q)
+      if (q != child && q != parent &&
+          std::max(walk_.weights(q, child), walk_.weights(child, q)) >= source_.min_check_weight)
+        return false;
+    return true;
+  }
+
+  // A weak-support tree link, in placement order.
+  bool WeakSupport(int child) const {
+    const int parent = order().parent[child];
+    if (parent < 0 || choices_.kept.count({parent, child})) return false;
+    const PairResult& r = book_.At(parent, child);
+    return r.weak_support && r.link.status == io::LinkStatus::kWeak;
+  }
+
+  // A loop longer than the child's own checks (CheckLink): a link between a scan placed through the
+  // child and a verified scan outside that subtree that agrees with the chained poses closes a loop
+  // through the weak link (a ring of stations: the ring's last link). It only confirms: a long
+  // loop that does not close fails nothing (its error sums the drift of every link on it).
+  // Pairs already registered come first; at most kLongLoopTries more are registered.
+  bool LongLoopCloses(int child, const std::vector<bool>& verified) {
+    auto below_child = [&](int q) {
+      for (int a = q; a >= 0; a = order().parent[a])
+        if (a == child) return true;
+      return false;
+    };
+    std::vector<std::tuple<int, int, int>> candidates;  // (-weight, outside, inside)
+    for (int a = 0; a < n_; ++a) {
+      if (a == child || !below_child(a)) continue;
+      for (int b = 0; b < n_; ++b) {
+        if (!verified[b] || below_child(b) || book_.Excluded(b, a) || book_.Excluded(a, b)) continue;
+        const int w = std::max(walk_.weights(a, b), walk_.weights(b, a));
+        if (w >= source_.min_check_weight) candidates.emplace_back(-w, b, a);
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(), [&](const auto& x, const auto& y) {
+      const bool done_x = book_.Find(std::get<1>(x), std::get<2>(x)) || book_.Find(std::get<2>(x), std::get<1>(x));
+      const bool done_y = book_.Find(std::get<1>(y), std::get<2>(y)) || book_.Find(std::get<2>(y), std::get<1>(y));
+      return done_x != done_y ? done_x : std::get<0>(x) < std::get<0>(y);
+    });
+    int registered = 0;
+    for (const auto& [neg_weight, b, a] : candidates) {
+      const PairResult* reverse = book_.Find(a, b);
+      const bool use_reverse = reverse && reverse->link.status != io::LinkStatus::kFailed;
+      if (!use_reverse && !book_.Find(b, a) && registered++ >= kLongLoopTries) break;
+      const PairResult& check = use_reverse ? *reverse : book_.Link(b, a);
+      if (check.link.status == io::LinkStatus::kFailed || check.NeedsLoop() || check.weak_support) continue;
+      const Eigen::Isometry3d b_from_a = use_reverse ? check.link.parent_from_child.inverse() : check.link.parent_from_child;
+      const PoseError gap = ComparePoses(walk_.world[b] * b_from_a, walk_.world[a]);
+      if (gap.position_m <= options_.loop_tolerance_m && gap.angle_rad <= options_.loop_tolerance_rad) {
+        LogInfo(scans_[order().parent[child]].name + " -> " + scans_[child].name + ": confirmed by the loop through " +
+                scans_[b].name + " - " + scans_[a].name);
+        return true;
+      }
     }
     return false;
+  }
+
+  // The tree links with weak support no loop closed on: their scans are placed but not verified.
+  // Each link's reason says why no loop did (said once, however often the tree is walked again).
+  void MarkUnconfirmedWeak() {
+    if (!source_.loop_checks || !options_.verify_loops) return;
+    std::vector<bool> confirmed(n_, false);  // weak-support links a loop closed on
+    std::vector<int> weak;
+    for (int child : order().order) {
+      if (!WeakSupport(child)) continue;
+      if (closed_[child]) confirmed[child] = true;
+      else weak.push_back(child);
+    }
+    // Placed with no unconfirmed weak link on the way up from the root.
+    auto verified_scans = [&]() {
+      std::vector<bool> verified(n_, false);
+      for (int q : order().order) {
+        const int p = order().parent[q];
+        verified[q] = p < 0 || (verified[p] && (!WeakSupport(q) || confirmed[q]));
+      }
+      return verified;
+    };
+    for (bool changed = true; changed;) {  // a confirmed link may verify the scans another's loop needs
+      changed = false;
+      for (int child : weak) {
+        if (confirmed[child]) continue;
+        const std::vector<bool> verified = verified_scans();
+        if (verified[order().parent[child]] && LongLoopCloses(child, verified)) confirmed[child] = changed = true;
+      }
+    }
+    for (int child : weak) {
+      if (confirmed[child]) continue;
+      walk_.unconfirmed_weak[child] = true;
+      const int parent = order().parent[child];
+      std::string& why = book_.At(parent, child).link.reason;
+      const std::string note = Lone(parent, child) ? "; no other scan is matched to it well enough to check it by a loop"
+                                                   : "; no loop through another scan confirms it";
+      if (why.find(note) == std::string::npos) why = why.substr(0, why.find("; a loop")) + note;
+    }
   }
 
   // The tree links of a loop that does not close, beyond the two failed at once: the paths from
@@ -384,6 +483,8 @@ class Walker {
   const int n_;
   const bool priors_;
   std::vector<bool> position_tried_;
+  static constexpr int kLongLoopTries = 3;  // pair registrations a long loop may add (LongLoopCloses)
+  std::vector<bool> closed_;  // per scan: a loop closed on its tree link in the last round of checks
   TreeWalk walk_;
   mutable std::map<std::tuple<int, int, int>, bool> twin_refuted_;  // TwinRefuted by (parent, child, twin)
 };
@@ -396,3 +497,4 @@ Expected<TreeWalk> WalkTree(const std::vector<Scan>& scans, const ScanOrderChoic
 }
 
 }  // namespace scanreg::pipeline
+

@@ -18,6 +18,11 @@ struct TreeWalk {
   ScanOrder order;
   std::vector<Eigen::Isometry3d> world;  // chained from the root at the identity
   std::vector<int> checked_with;         // per scan: the scan its link was loop-checked with, or -1
+  // Per scan: its tree link is weak for want of support (PairResult::weak_support) and no loop
+  // through another scan closed on it (a lone pair, or every check failed on its own), so its pose
+  // is not verified (issue 33: "registered" means verified). Only when loops are checked; never
+  // for a link the user kept.
+  std::vector<bool> unconfirmed_weak;
   Eigen::MatrixXi weights;               // the source's weights and the partners by position
 };
 
