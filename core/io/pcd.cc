@@ -112,6 +112,10 @@ Expected<Scan> ReadPcd(const std::filesystem::path& path, ProgressSink& progress
   scan.world_from_scan = Eigen::Isometry3d::Identity();
   scan.world_from_scan.linear() = orientation.cast<double>().normalized().toRotationMatrix();
   scan.world_from_scan.translation() = origin.head<3>().cast<double>();
+  if (!scan.world_from_scan.matrix().allFinite()) {
+    return MakeError(ErrorCode::kParseError, path.string() + ": the VIEWPOINT line does not give a pose PCL can read; "
+                                                             "write it as 7 finite numbers, e.g. VIEWPOINT 0 0 0 1 0 0 0");
+  }
   progress.Report(1.0, stage);
   return scan;
 }

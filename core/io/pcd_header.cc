@@ -1,7 +1,10 @@
 #include "core/io/pcd_header.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <fstream>
 #include <sstream>
 
@@ -67,7 +70,23 @@ Expected<PcdHeader> ReadPcdHeader(const std::filesystem::path& path) {
     words >> key;
     std::vector<std::string> values;
     for (std::string w; words >> w;) values.push_back(w);
-    if (key == "VERSION" || key == "VIEWPOINT") continue;  // VIEWPOINT's 7 numbers are PCL's to parse
+    if (key == "VERSION") continue;
+    if (key == "VIEWPOINT") {  // PCL parses it again; a pose that is no pose is refused here, with its line
+      const std::string what = "VIEWPOINT must be 7 finite numbers, tx ty tz qw qx qy qz, with a quaternion that is "
+                               "not zero (the identity: VIEWPOINT 0 0 0 1 0 0 0)";
+      if (values.size() != 7) return bad(line_number, line, what);
+      double q2 = 0;
+      for (std::size_t k = 0; k < values.size(); ++k) {
+        char* end = nullptr;
+        const double v = std::strtod(values[k].c_str(), &end);
+        if (end == values[k].c_str() || *end != '\0' || !std::isfinite(v) ||
+            std::abs(v) > std::numeric_limits<float>::max())
+          return bad(line_number, line, what);
+        if (k >= 3) q2 += v * v;
+      }
+      if (!(q2 > 1e-12)) return bad(line_number, line, what);
+      continue;
+    }
     if (key == "FIELDS" || key == "COLUMNS") {
       if (values.empty()) return bad(line_number, line, "FIELDS lists no field");
       h.fields = values;

@@ -125,6 +125,15 @@ TEST(Pcd, InconsistentHeadersAreNamedBeforePclReadsTheData) {
       {"unknown.pcd", fields + sizes + "WIDTH 1\nBOGUS \x01\x02\nDATA ascii\n1 2 3\n", "unknown header entry 'BOGUS'"},
       {"nodata.pcd", fields + sizes + "WIDTH 1\n", "the header ends before its DATA line"},
       {"zero.pcd", fields + sizes + "WIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA ascii\n", "no points"},
+      // A viewpoint that is no pose (found by the fuzz test: PCL read these as a non-finite pose).
+      {"viewinf.pcd", fields + sizes + "WIDTH 1\nVIEWPOINT 1e309 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "viewinf.pcd:7: VIEWPOINT must be 7 finite numbers"},
+      {"viewdash.pcd", fields + sizes + "WIDTH 1\nVIEWPOINT - 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "VIEWPOINT must be 7 finite numbers"},
+      {"viewzero.pcd", fields + sizes + "WIDTH 1\nVIEWPOINT 0 0 0 0 0 0 0\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "quaternion that is not zero"},
+      {"viewshort.pcd", fields + sizes + "WIDTH 1\nVIEWPOINT 0 0 0 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "VIEWPOINT must be 7"},
   };
   for (const Case& c : cases) {
     test::WriteBytes(dir / c.name, c.text);
