@@ -22,6 +22,7 @@ int RunSimulate(const std::vector<std::string>& args);
 int RunDemo(const std::vector<std::string>& args);
 int RunNew(const std::vector<std::string>& args);
 int RunInfo(const std::vector<std::string>& args);
+int RunLink(const std::vector<std::string>& args);
 int RunExportPoses(const std::vector<std::string>& args);
 int RunConvert(const std::vector<std::string>& args);
 int RunRegister(const std::vector<std::string>& args);

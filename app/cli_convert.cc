@@ -53,6 +53,7 @@ const std::vector<Command>& Commands() {
       {"merge", "merge the registered scans into one surface (ML distance or TSDF) and write a mesh", RunMerge},
       {"new", "create a project from PTX / E57 / PLY / PCD scan files", RunNew},
       {"info", "list a project's scans: size, valid %, pose, status", RunInfo},
+      {"link", "accept or reject a link (a weak link placing a scan that is not verified): register keeps the decision", RunLink},
       {"report", "write the registration report: HTML page with the confusion matrix, network, links, poses, errors",
        RunReport},
       {"export-poses",

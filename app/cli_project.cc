@@ -1,4 +1,4 @@
-// scanreg-cli new / info / export-poses.
+// scanreg-cli new / info / link / export-poses.
 #include <cmath>
 #include <cstdio>
 
@@ -9,7 +9,9 @@
 #include "core/io/output_paths.h"
 #include "core/io/pose_csv.h"
 #include "core/io/pose_file.h"
+#include "core/io/project_lock.h"
 #include "core/pipeline/create_project.h"
+#include "core/pipeline/project_edits.h"
 #include "core/pipeline/project_scans.h"
 #include "core/pipeline/register_project.h"
 
@@ -54,6 +56,47 @@ int RunNew(const std::vector<std::string>& argv) {
   auto project = pipeline::CreateProject(args->positional()[0], options, progress, cancel);
   if (!project) return Fail(project.error());
   std::printf("created %s with %zu scans\n", project->project.file.string().c_str(), project->project.scans.size());
+  return 0;
+}
+
+int RunLink(const std::vector<std::string>& argv) {
+  int code = 0;
+  auto args = ParseOrHelp("link", "PROJECT.scanreg.json PARENT CHILD --accept|--reject|--clear", argv,
+                          {{"accept", false, false,
+                            "                   keep the link as it is in every later registration (a weak link "
+                            "whose scan was 'not verified' then places it)"},
+                           {"reject", false, false, "                   never use the link"},
+                           {"clear", false, false, "                    forget the decision on the link"}},
+                          &code);
+  if (!args) return code;
+  const int chosen = args->Has("accept") + args->Has("reject") + args->Has("clear");
+  if (args->positional().size() != 3 || chosen != 1) {
+    return Fail(MakeError(ErrorCode::kInvalidArgument,
+                          "link: give the project, the link's parent and child scans, and one of --accept, --reject, "
+                          "--clear"));
+  }
+  // One writer at a time (a register running on the project would otherwise lose this decision).
+  Expected<io::ProjectLock> lock = io::ProjectLock::Acquire(args->positional()[0], "scanreg-cli link");
+  if (!lock) return Fail(lock.error());
+  auto project = io::LoadProject(args->positional()[0]);
+  if (!project) return Fail(project.error());
+  const std::string& parent = args->positional()[1];
+  const std::string& child = args->positional()[2];
+  const pipeline::LinkDecision decision = args->Has("accept")   ? pipeline::LinkDecision::kAccept
+                                          : args->Has("reject") ? pipeline::LinkDecision::kReject
+                                                                : pipeline::LinkDecision::kClear;
+  if (Status s = pipeline::SetLinkDecision(parent, child, decision, *project); !s) {
+    return Fail(MakeError(s.error().code, "link: " + s.error().message));
+  }
+  if (Status s = io::SaveProject(*project, project->file); !s) return Fail(s.error());
+  const char* done = decision == pipeline::LinkDecision::kAccept   ? "accepted"
+                     : decision == pipeline::LinkDecision::kReject ? "rejected"
+                                                                    : "cleared the decision on";
+  std::printf("%s the link %s -> %s in %s; the next register %s\n", done, parent.c_str(), child.c_str(),
+              project->file.string().c_str(),
+              decision == pipeline::LinkDecision::kAccept   ? "keeps it as it is"
+              : decision == pipeline::LinkDecision::kReject ? "never uses it"
+                                                            : "judges it on its evidence");
   return 0;
 }
 

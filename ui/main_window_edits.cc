@@ -188,14 +188,10 @@ bool MainWindow::SetParentOverride(const QString& child, const QString& parent) 
 
 void MainWindow::SetLinkDecision(const QString& parent, const QString& child, bool accept, bool reject) {
   io::Project after = project();
-  bool found = false;
-  for (io::LinkRecord& l : after.links) {
-    if (l.parent != parent.toStdString() || l.child != child.toStdString()) continue;
-    l.user_accepted = accept;
-    l.user_rejected = reject;
-    found = true;
-  }
-  if (!found) return;
+  const pipeline::LinkDecision decision = reject   ? pipeline::LinkDecision::kReject
+                                          : accept ? pipeline::LinkDecision::kAccept
+                                                   : pipeline::LinkDecision::kClear;
+  if (!pipeline::SetLinkDecision(parent.toStdString(), child.toStdString(), decision, after)) return;
   const QString text = reject   ? tr("reject %1 → %2").arg(child, parent)
                        : accept ? tr("accept %1 → %2").arg(child, parent)
                                 : tr("clear the decision on %1 → %2").arg(child, parent);

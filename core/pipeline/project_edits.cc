@@ -94,6 +94,26 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   return Status::Ok();
 }
 
+Status SetLinkDecision(const std::string& parent, const std::string& child, LinkDecision decision,
+                       io::Project& project) {
+  for (const std::string& name : {parent, child})
+    if (project.FindScan(name) < 0)
+      return MakeError(ErrorCode::kInvalidArgument, "'" + name + "' is not a scan of the project");
+  bool found = false;
+  for (io::LinkRecord& l : project.links) {
+    if (l.parent != parent || l.child != child) continue;
+    l.user_accepted = decision == LinkDecision::kAccept;
+    l.user_rejected = decision == LinkDecision::kReject;
+    found = true;
+  }
+  if (!found) {
+    return MakeError(ErrorCode::kInvalidArgument, "no link " + parent + " -> " + child +
+                                                      " is listed in the project; register it first (the links are "
+                                                      "listed parent first, as register prints them)");
+  }
+  return Status::Ok();
+}
+
 Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_scan, bool move_dependents,
                    io::Project& project) {
   const int s = project.FindScan(scan);

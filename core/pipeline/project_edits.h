@@ -27,6 +27,14 @@ namespace scanreg::pipeline {
 // later registration uses it as it is (UserChoices::kept).
 Status ApplyPairResult(const io::LinkRecord& link, io::Project& project);
 
+// The user's decision on the listed link parent -> child (every record of that pair): an accepted
+// link is kept as it is by later registrations (a weak link whose scan was "not verified" then
+// places it), a rejected one is never used; kClear forgets the decision. The poses do not change
+// until the next registration. Errors (kInvalidArgument): an unknown scan, or no such link listed.
+enum class LinkDecision { kAccept, kReject, kClear };
+Status SetLinkDecision(const std::string& parent, const std::string& child, LinkDecision decision,
+                       io::Project& project);
+
 // Places `scan` at `world_from_scan` by hand: it becomes registered with a manual pose (no link
 // evidence; see ProjectScan::manual_pose). With `move_dependents`, the scans registered through it
 // move along (moving the root with its dependents moves the whole registered project, e.g. into

@@ -354,5 +354,58 @@ TEST(CliTest, HelpListsEverySubcommand) {
     EXPECT_NE(r.output.find(c), std::string::npos) << c;
 }
 
+// The user's decision on a link from the command line (the GUI's right-click on the scan network):
+// saved in the project, and kept by the next registration; nonsense names a clear error.
+TEST(CliTest, LinkRecordsTheUsersDecisionAndRegisterKeepsIt) {
+  test::TempDir dir;
+  ASSERT_EQ(RunCli("simulate --stations 3 --spacing 4 --size 600x150 --seed 2 --out " + Quote(dir / "p")).status, 0);
+  const auto file = dir / "p" / "project.scanreg.json";
+  RunResult reg = RunCli("register " + Quote(file));
+  ASSERT_EQ(reg.status, 0) << reg.output;
+  Expected<io::Project> project = io::LoadProject(file);
+  ASSERT_TRUE(project.ok());
+  const io::LinkRecord* tree = nullptr;
+  for (const io::LinkRecord& l : project->links)
+    if (!tree && !l.loop_check && l.status != io::LinkStatus::kFailed) tree = &l;
+  ASSERT_NE(tree, nullptr);
+  const std::string parent = tree->parent, child = tree->child;
+
+  RunResult accept = RunCli("link " + Quote(file) + " " + parent + " " + child + " --accept");
+  ASSERT_EQ(accept.status, 0) << accept.output;
+  EXPECT_NE(accept.output.find("accepted the link " + parent + " -> " + child), std::string::npos) << accept.output;
+  auto decision = [&](bool* accepted, bool* rejected) {
+    Expected<io::Project> p = io::LoadProject(file);
+    ASSERT_TRUE(p.ok());
+    *accepted = *rejected = false;
+    for (const io::LinkRecord& l : p->links)
+      if (l.parent == parent && l.child == child) *accepted |= l.user_accepted, *rejected |= l.user_rejected;
+  };
+  bool accepted = false, rejected = false;
+  decision(&accepted, &rejected);
+  EXPECT_TRUE(accepted);
+  EXPECT_FALSE(rejected);
+  ASSERT_EQ(RunCli("register " + Quote(file)).status, 0);
+  decision(&accepted, &rejected);
+  EXPECT_TRUE(accepted) << "the next registration dropped the user's decision";
+
+  ASSERT_EQ(RunCli("link " + Quote(file) + " " + parent + " " + child + " --reject").status, 0);
+  decision(&accepted, &rejected);
+  EXPECT_FALSE(accepted);
+  EXPECT_TRUE(rejected);
+  ASSERT_EQ(RunCli("link " + Quote(file) + " " + parent + " " + child + " --clear").status, 0);
+  decision(&accepted, &rejected);
+  EXPECT_FALSE(accepted || rejected);
+
+  RunResult unknown = RunCli("link " + Quote(file) + " " + parent + " nosuchscan --accept");
+  EXPECT_NE(unknown.status, 0);
+  EXPECT_NE(unknown.output.find("'nosuchscan' is not a scan of the project"), std::string::npos) << unknown.output;
+  RunResult reversed = RunCli("link " + Quote(file) + " " + child + " " + parent + " --accept");
+  EXPECT_NE(reversed.status, 0);
+  EXPECT_NE(reversed.output.find("no link " + child + " -> " + parent), std::string::npos) << reversed.output;
+  RunResult two = RunCli("link " + Quote(file) + " " + parent + " " + child + " --accept --reject");
+  EXPECT_NE(two.status, 0);
+  EXPECT_NE(two.output.find("one of --accept, --reject, --clear"), std::string::npos) << two.output;
+}
+
 }  // namespace
 }  // namespace scanreg
