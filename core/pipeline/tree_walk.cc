@@ -142,14 +142,10 @@ class Walker {
     if (!CheckAll() && !needs_loop && book_.At(parent, child).link.status == io::LinkStatus::kOk) return partners;
     // A link with weak support is confirmed only by a closed loop (issue 33: "registered" means
     // verified), so every partner is tried in turn until a check serves.
-    const bool weak = book_.At(parent, child).weak_support && book_.At(parent, child).link.status == io::LinkStatus::kWeak;
+    const bool weak = WeakSupport(child);
     // A loop that confirms a link leaves the child's subtree: a scan placed through the child
     // closes a loop of the subtree's own links, whatever the link to the parent is.
-    auto below_child = [&](int q) {
-      for (int a = q; a >= 0; a = order().parent[a])
-        if (a == child) return true;
-      return false;
-    };
+    auto below_child = [&](int q) { return PlacedThrough(q, child); };
     for (int q : order().order) {
       if (q == child || q == parent || order().parent[q] == child || ((needs_loop || weak) && below_child(q))) continue;
       const PairResult* registered = book_.Find(q, child);  // the user's rejected links are excluded unregistered
@@ -272,6 +268,13 @@ class Walker {
     return true;
   }
 
+  // Whether scan q is placed through `child` (child itself included).
+  bool PlacedThrough(int q, int child) const {
+    for (int a = q; a >= 0; a = order().parent[a])
+      if (a == child) return true;
+    return false;
+  }
+
   // A weak-support tree link, in placement order.
   bool WeakSupport(int child) const {
     const int parent = order().parent[child];
@@ -286,27 +289,20 @@ class Walker {
   // loop that does not close fails nothing (its error sums the drift of every link on it).
   // Pairs already registered come first; at most kLongLoopTries more are registered.
   bool LongLoopCloses(int child, const std::vector<bool>& verified) {
-    auto below_child = [&](int q) {
-      for (int a = q; a >= 0; a = order().parent[a])
-        if (a == child) return true;
-      return false;
-    };
-    std::vector<std::tuple<int, int, int>> candidates;  // (-weight, outside, inside)
+    std::vector<std::tuple<bool, int, int, int>> candidates;  // (not registered yet, -weight, outside, inside)
     for (int a = 0; a < n_; ++a) {
-      if (a == child || !below_child(a)) continue;
+      if (a == child || !PlacedThrough(a, child)) continue;
       for (int b = 0; b < n_; ++b) {
-        if (!verified[b] || below_child(b) || book_.Excluded(b, a) || book_.Excluded(a, b)) continue;
+        if (!verified[b] || PlacedThrough(b, child) || book_.Excluded(b, a) || book_.Excluded(a, b)) continue;
         const int w = std::max(walk_.weights(a, b), walk_.weights(b, a));
-        if (w >= source_.min_check_weight) candidates.emplace_back(-w, b, a);
+        if (w >= source_.min_check_weight) candidates.emplace_back(!book_.Find(b, a) && !book_.Find(a, b), -w, b, a);
       }
     }
-    std::stable_sort(candidates.begin(), candidates.end(), [&](const auto& x, const auto& y) {
-      const bool done_x = book_.Find(std::get<1>(x), std::get<2>(x)) || book_.Find(std::get<2>(x), std::get<1>(x));
-      const bool done_y = book_.Find(std::get<1>(y), std::get<2>(y)) || book_.Find(std::get<2>(y), std::get<1>(y));
-      return done_x != done_y ? done_x : std::get<0>(x) < std::get<0>(y);
+    std::stable_sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
+      return std::tie(std::get<0>(x), std::get<1>(x)) < std::tie(std::get<0>(y), std::get<1>(y));
     });
     int registered = 0;
-    for (const auto& [neg_weight, b, a] : candidates) {
+    for (const auto& [new_pair, neg_weight, b, a] : candidates) {
       const PairResult* reverse = book_.Find(a, b);
       const bool use_reverse = reverse && reverse->link.status != io::LinkStatus::kFailed;
       if (!use_reverse && !book_.Find(b, a) && registered++ >= kLongLoopTries) break;
