@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
       {"georef", scanreg::bench::RunGeorefBench}, {"city", scanreg::bench::RunCityBench},
       {"big", scanreg::bench::RunBigScansBench}, {"trust", scanreg::bench::RunTrustBench},
       {"interiors", scanreg::bench::RunInteriorsBench}, {"combined", scanreg::bench::RunCombinedBench},
+      {"pairs", scanreg::bench::RunPairsBench},
       {"lists", scanreg::bench::RunListsBench}};
   bool quick = false;
   std::vector<std::string> chosen;
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--section") == 0 && i + 1 < argc) {
       chosen.emplace_back(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef|city|big|trust|interiors|combined|lists ...]\n");
+      std::fprintf(stderr, "usage: scanreg-bench [--quick] [--section simulate|io|register|merge|export|em|global|geometric|hard|georef|city|big|trust|interiors|combined|pairs|lists ...]\n");
       return 2;
     }
   }

@@ -60,6 +60,7 @@ void RunCityBench(Table& table, bool quick);
 void RunTrustBench(Table& table, bool quick);  // bench_trust.cc
 void RunInteriorsBench(Table& table, bool quick);  // bench_interiors.cc
 void RunCombinedBench(Table& table, bool quick);   // bench_combined.cc
+void RunPairsBench(Table& table, bool quick);      // bench_pairs.cc
 void RunBigScansBench(Table& table, bool quick);  // bench_city.cc
 void RunListsBench(Table& table, bool quick);     // bench_lists.cc
 
