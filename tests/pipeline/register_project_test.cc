@@ -224,6 +224,30 @@ TEST(RegisterProjectTest, RepeatedWindowsNeverYieldAWrongAcceptedLink) {
   }
 }
 
+// Two scans alone, 5 m apart on a static street at 1000x250: few correspondences agree (fewer than
+// the 15 that make a link well supported), and no third scan can close a loop. The surfaces carry
+// the pose — most of the child overlaps at the noise level and nothing lies in the other scanner's
+// free space — so the pair is registered, with that evidence named, not left "not verified".
+TEST(RegisterProjectTest, AnIsolatedPairWithFewCorrespondencesIsRegisteredWhenTheSurfacesAgree) {
+  SimulatedProjectOptions o = StreetOptions(2);
+  o.scanner.cols = 1000;
+  o.scanner.rows = 250;
+  o.seed = o.scanner.seed = o.scene.seed = 1;
+  const std::vector<Scan> scans = Simulate(o);
+  ASSERT_EQ(scans.size(), 2u);
+  Expected<ProjectRegistration> r = Register(scans, RegisterOptions{});
+  ASSERT_TRUE(r.ok()) << r.error().ToString();
+  ASSERT_EQ(r->links.size(), 1u);
+  const io::LinkRecord& link = r->links[0];
+  ASSERT_LT(link.consistent, RegisterOptions{}.thresholds.weak_inliers) << "the pair no longer tests the weak case";
+  ASSERT_TRUE(r->scans[0].registered && r->scans[1].registered)
+      << r->scans[0].reason << " / " << r->scans[1].reason << " / " << link.reason;
+  EXPECT_NE(link.reason.find("the surfaces agree"), std::string::npos) << link.reason;
+  const PoseError e = *LinkReferenceError(link, scans);
+  EXPECT_LT(e.position_m, 0.02);
+  EXPECT_LT(e.angle_rad * kDeg, 0.1);
+}
+
 TEST(RegisterProjectTest, NonsenseOptionsAndTooFewScansAreErrors) {
   RegisterOptions bad;
   bad.match.ratio = 0.0;
