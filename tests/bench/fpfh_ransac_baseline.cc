@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "tests/bench/bench_table.h"
+#include "tests/bench/pcl_clouds.h"
 
 namespace scanreg::bench {
 namespace {
@@ -29,16 +30,6 @@ namespace {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using NormalCloud = pcl::PointCloud<pcl::PointNormal>;
 using Features = pcl::PointCloud<pcl::FPFHSignature33>;
-
-Cloud::Ptr Downsample(const Cloud::Ptr& in, double voxel_m) {
-  Cloud::Ptr down(new Cloud);
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(in);
-  const float leaf = static_cast<float>(voxel_m);
-  grid.setLeafSize(leaf, leaf, leaf);
-  grid.filter(*down);
-  return down;
-}
 
 // Normals by radius, oriented towards the scanner; points without one are dropped.
 NormalCloud::Ptr WithNormals(const Cloud::Ptr& cloud, double radius_m) {
@@ -75,11 +66,7 @@ struct Prepared {
 };
 
 Prepared Prepare(const Scan& scan, const FpfhRansacOptions& o) {
-  Cloud::Ptr raw(new Cloud);
-  raw->reserve(scan.CountValid());
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i] && scan.points[i].norm() <= o.max_range_m)
-      raw->push_back(pcl::PointXYZ(scan.points[i].x(), scan.points[i].y(), scan.points[i].z()));
+  const Cloud::Ptr raw = PclPoints(scan, o.max_range_m);
   Prepared out;
   const Cloud::Ptr fine = Downsample(raw, o.icp_voxel_m);
   // Normals of the ICP cloud from about 30 neighbours (the tutorial's max_nn) at its spacing.

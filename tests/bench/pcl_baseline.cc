@@ -29,6 +29,7 @@
 #include <string>
 
 #include "tests/bench/bench_table.h"
+#include "tests/bench/pcl_clouds.h"
 
 namespace scanreg::bench {
 namespace {
@@ -38,24 +39,10 @@ struct PclScan {
   pcl::PointCloud<pcl::FPFHSignature33>::Ptr features{new pcl::PointCloud<pcl::FPFHSignature33>};
 };
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr Downsample(const pcl::PointCloud<pcl::PointXYZ>::Ptr& in, double voxel_m) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr down(new pcl::PointCloud<pcl::PointXYZ>);
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(in);
-  const float leaf = static_cast<float>(voxel_m);
-  grid.setLeafSize(leaf, leaf, leaf);
-  grid.filter(*down);
-  return down;
-}
-
 // Voxel grids (scanner frame): the fine cloud for ICP, the coarse one with normals and FPFH; points
 // whose normal could not be estimated are dropped (their histograms would be NaN).
 PclScan PclPrepare(const Scan& scan, const PclOptions& o) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr raw(new pcl::PointCloud<pcl::PointXYZ>);
-  raw->reserve(scan.CountValid());
-  for (std::size_t i = 0; i < scan.size(); ++i)
-    if (scan.valid[i] && scan.points[i].norm() <= o.max_range_m)
-      raw->push_back(pcl::PointXYZ(scan.points[i].x(), scan.points[i].y(), scan.points[i].z()));
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr raw = PclPoints(scan, o.max_range_m);
   PclScan out;
   out.fine = Downsample(raw, o.fine_voxel_m);
   pcl::PointCloud<pcl::PointXYZ>::Ptr down = Downsample(out.fine, o.coarse_voxel_m);
