@@ -513,7 +513,7 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
     // 13.9 mm RMS at 12 mm noise, no conflict, was left "not verified"; the kitchen's wrong poses
     // (12-13 correspondences) overlapped 9 % and were point lists, where free space is not tested.
     if (result.weak_support && !coarse->ambiguous && best.evidence.tested > 0 &&
-        link.overlap >= 2 * options.thresholds.weak_overlap && SurfaceFailure(options.thresholds, link).empty() &&
+        link.overlap >= 2 * options.thresholds.weak_overlap &&  // weak, so SurfaceFailure passed (Classify)
         SurfaceWeakness(options.thresholds, link).empty() && link.moving <= options.thresholds.weak_conflict &&
         !(rival && Score(*rival) >= 0.5 * Score(best)) &&
         !OtherFittingPose(options.thresholds, best, hyps, rank, options.coarse) &&
