@@ -4,7 +4,7 @@
 #include <limits>
 #include <cstdint>
 #include <cstring>
-#include <unordered_map>
+#include <algorithm>
 #include <unordered_set>
 
 namespace scanreg {
@@ -15,13 +15,61 @@ struct VoxelKey {
   bool operator==(const VoxelKey& o) const { return x == o.x && y == o.y && z == o.z; }
 };
 
-struct VoxelKeyHash {
-  std::size_t operator()(const VoxelKey& k) const {
-    // Teschner et al. 2003 spatial hash.
-    return static_cast<std::size_t>((static_cast<std::uint64_t>(k.x) * 73856093u) ^
-                                    (static_cast<std::uint64_t>(k.y) * 19349663u) ^
-                                    (static_cast<std::uint64_t>(k.z) * 83492791u));
+// Voxel -> slot, open addressing with linear probing (power-of-two capacity, at most half full):
+// a scan's 2 M points hashed into a node-based std::unordered_map cost ~0.15 s a scan, most of it
+// allocating nodes (issue 36).
+class VoxelSlots {
+ public:
+  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFu;
+  explicit VoxelSlots(std::size_t expected) { Rehash(std::max<std::size_t>(64, NextPow2(2 * expected))); }
+  // The slot of `key`, or `next` stored as its slot when the key is new (*inserted true).
+  std::uint32_t FindOrInsert(const VoxelKey& key, std::uint32_t next, bool* inserted) {
+    if (2 * (size_ + 1) > keys_.size()) Rehash(2 * keys_.size());
+    std::size_t i = Hash(key) & mask_;
+    while (slots_[i] != kEmpty) {
+      if (keys_[i] == key) {
+        *inserted = false;
+        return slots_[i];
+      }
+      i = (i + 1) & mask_;
+    }
+    keys_[i] = key;
+    slots_[i] = next;
+    ++size_;
+    *inserted = true;
+    return next;
   }
+
+ private:
+  static std::size_t NextPow2(std::size_t n) {
+    std::size_t p = 1;
+    while (p < n) p <<= 1;
+    return p;
+  }
+  static std::size_t Hash(const VoxelKey& k) {
+    std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ULL;
+    h ^= static_cast<std::uint64_t>(k.y) * 0xC2B2AE3D27D4EB4FULL;
+    h ^= static_cast<std::uint64_t>(k.z) * 0x165667B19E3779F9ULL;
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+  void Rehash(std::size_t capacity) {
+    std::vector<VoxelKey> old_keys = std::move(keys_);
+    std::vector<std::uint32_t> old_slots = std::move(slots_);
+    keys_.assign(capacity, VoxelKey{0, 0, 0});
+    slots_.assign(capacity, kEmpty);
+    mask_ = capacity - 1;
+    for (std::size_t j = 0; j < old_slots.size(); ++j) {
+      if (old_slots[j] == kEmpty) continue;
+      std::size_t i = Hash(old_keys[j]) & mask_;
+      while (slots_[i] != kEmpty) i = (i + 1) & mask_;
+      keys_[i] = old_keys[j];
+      slots_[i] = old_slots[j];
+    }
+  }
+
+  std::vector<VoxelKey> keys_;
+  std::vector<std::uint32_t> slots_;
+  std::size_t mask_ = 0, size_ = 0;
 };
 
 // A point's exact bits, for finding repeats.
@@ -70,33 +118,33 @@ std::vector<Eigen::Vector3d> VoxelDownsample(const std::vector<Eigen::Vector3d>&
       if (p.allFinite()) out.push_back(p);
     return out;
   }
-  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> slot;
-  slot.reserve(points.size() / 4 + 16);
+  VoxelSlots slot(points.size() / 8 + 16);
   std::vector<Eigen::Vector3d> sum;
   std::vector<int> count;
   const double inv = 1.0 / voxel_m;
   // A scan's consecutive points mostly share a voxel: the last one's slot is tried before the hash.
   VoxelKey last_key{0, 0, 0};
-  std::size_t last_slot = std::numeric_limits<std::size_t>::max();
+  std::uint32_t last_slot = VoxelSlots::kEmpty;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     const VoxelKey key{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
                        static_cast<std::int64_t>(std::floor(p.z() * inv))};
-    if (last_slot != std::numeric_limits<std::size_t>::max() && key == last_key) {
+    if (last_slot != VoxelSlots::kEmpty && key == last_key) {
       sum[last_slot] += p;
       ++count[last_slot];
       continue;
     }
-    auto [it, inserted] = slot.try_emplace(key, sum.size());
+    bool inserted = false;
+    const std::uint32_t s = slot.FindOrInsert(key, static_cast<std::uint32_t>(sum.size()), &inserted);
     if (inserted) {
       sum.push_back(p);
       count.push_back(1);
     } else {
-      sum[it->second] += p;
-      ++count[it->second];
+      sum[s] += p;
+      ++count[s];
     }
     last_key = key;
-    last_slot = it->second;
+    last_slot = s;
   }
   out.resize(sum.size());
   for (std::size_t i = 0; i < sum.size(); ++i) out[i] = sum[i] / count[i];
