@@ -348,6 +348,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
     const int* near = near_scans.data() + near_begin[bi];
     const int* near_end = near_scans.data() + near_begin[bi + 1];
     std::vector<int> group, candidates;
+    PatchSpheres spheres;
     // One hash query per G^3 group of grid points, then a bounding-sphere filter per point: the
     // same candidates as a query per point, without its hash look-ups and sorting.
     for (int gz = 0; gz < B; gz += G) {
@@ -357,6 +358,7 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
               0.5f * (grid.Position(b.key, gx, gy, gz) + grid.Position(b.key, gx + G - 1, gy + G - 1, gz + G - 1));
           if (use_patches) patches.Candidates(centre, radius + group_reach, &group);
           if (group.empty() && near == near_end) continue;
+          if (ml || consensus) spheres.Load(patches, group);
           for (int z = gz; z < gz + G; ++z) {
             for (int y = gy; y < gy + G; ++y) {
               for (int x = gx; x < gx + G; ++x) {
@@ -364,12 +366,12 @@ Expected<SparseGrid> ComputeField(RangePatches& patches, const MergeOptions& opt
                 const Eigen::Vector3f p = grid.Position(b.key, x, y, z);
                 float d = 0.0f;
                 if (ml) {
-                  patches.Filter(group, p, radius, &candidates);
+                  spheres.Filter(p, float(radius), &candidates);
                   if (MaximumLikelihoodDistance(patches, p, options, candidates, &d)) {
                     b.distance[l] = d, b.weight[l] = 1.0f;
                   }
                 } else if (consensus) {
-                  patches.Filter(group, p, radius, &candidates);
+                  spheres.Filter(p, float(radius), &candidates);
                   float w = 0.0f;
                   if (ConsensusDistance(patches, p, options, candidates, &d, &w)) b.distance[l] = d, b.weight[l] = w;
                 } else {  // its bounding-sphere test is inside

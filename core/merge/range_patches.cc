@@ -525,12 +525,40 @@ void RangePatches::Candidates(const Eigen::Vector3f& x, double radius_m, std::ve
   }
 }
 
-void RangePatches::Filter(const std::vector<int>& from, const Eigen::Vector3f& x, double radius_m,
-                          std::vector<int>* out) const {
-  out->clear();
-  for (int p : from) {
-    if (Reaches(p, x, float(radius_m))) out->push_back(p);
+void PatchSpheres::Load(const RangePatches& patches, const std::vector<int>& ids) {
+  ids_ = ids;
+  const std::size_t n = ids.size();
+  x_.resize(n), y_.resize(n), z_.resize(n), r_.resize(n), hit_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& c = patches.centroid[ids[i]];
+    x_[i] = c.x(), y_[i] = c.y(), z_[i] = c.z(), r_[i] = patches.radius[ids[i]];
   }
+}
+
+void PatchSpheres::Filter(const Eigen::Vector3f& x, float radius_m, std::vector<int>* out) const {
+  const std::size_t n = ids_.size();
+  const float px = x.x(), py = x.y(), pz = x.z();
+  const float* __restrict cx = x_.data();
+  const float* __restrict cy = y_.data();
+  const float* __restrict cz = z_.data();
+  const float* __restrict r = r_.data();
+  unsigned char* __restrict hit = hit_.data();
+  // The same arithmetic as RangePatches::Reaches, in the same order.
+  for (std::size_t i = 0; i < n; ++i) {
+    const float dx = cx[i] - px, dy = cy[i] - py, dz = cz[i] - pz;
+    const float reach = radius_m + r[i];
+    hit[i] = (dx * dx + dy * dy) + dz * dz <= reach * reach;
+  }
+  // Compacted without branches: every id is written, the next write moves on only past a hit.
+  out->resize(n);
+  int* __restrict o = out->data();
+  const int* __restrict ids = ids_.data();
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    o[k] = ids[i];
+    k += hit[i];
+  }
+  out->resize(k);
 }
 
 }  // namespace scanreg::merge

@@ -61,9 +61,6 @@ struct RangePatches {
   // Indices of the patches that may lie within radius_m of x (bounding-sphere test), each once.
   // Patches spanning more than 16^3 hash cells are never returned. Thread-safe.
   void Candidates(const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const;
-  // The patches of `from` whose bounding sphere reaches within radius_m of x, in their order: the
-  // candidates of a point, from those of a larger ball around it (one hash query for many points).
-  void Filter(const std::vector<int>& from, const Eigen::Vector3f& x, double radius_m, std::vector<int>* out) const;
   // Bounding-sphere test: patch p may lie within radius_m of x.
   bool Reaches(int p, const Eigen::Vector3f& x, float radius_m) const {
     const float reach = radius_m + radius[p];
@@ -80,6 +77,23 @@ struct RangePatches {
   double cell = 1.0;
   std::vector<Eigen::Vector3f> centroid;
   std::vector<float> radius;  // per patch: centroid-to-vertex
+};
+
+// The bounding spheres of a set of patches side by side, one array per coordinate: the candidates of
+// a point, from those of a larger ball around it (one hash query for a group of grid points, then
+// this filter per point). The copies keep the per-point pass in cache and vectorised; reading the
+// spheres from the patches' arrays at each point was a fifth of a consensus merge (issue 35).
+class PatchSpheres {
+ public:
+  void Load(const RangePatches& patches, const std::vector<int>& ids);
+  // The loaded patches whose bounding sphere reaches within radius_m of x (RangePatches::Reaches),
+  // in their order.
+  void Filter(const Eigen::Vector3f& x, float radius_m, std::vector<int>* out) const;
+
+ private:
+  std::vector<int> ids_;
+  std::vector<float> x_, y_, z_, r_;
+  mutable std::vector<unsigned char> hit_;
 };
 
 // What a tiled merge keeps of a scan between tiles, from one pass over it (issue 13, item 5): its
