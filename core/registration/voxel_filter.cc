@@ -1,7 +1,6 @@
 #include "core/registration/voxel_filter.h"
 
 #include <cmath>
-#include <limits>
 #include <cstdint>
 #include <cstring>
 #include <algorithm>
