@@ -108,6 +108,8 @@ std::uint64_t FeatureCacheKey(const Scan& scan, const SiftOptions& options) {
     h.AddValue(static_cast<std::int64_t>(strips));
     h.AddValue(static_cast<std::int64_t>(kStripOverlapPx));
   }
+  // A half-size detection image (a wide panorama) finds other keypoints.
+  if (const int scale = SiftImageScale(scan.cols, options); scale > 1) h.AddValue(static_cast<std::int64_t>(scale));
   // The angular grid decides whether the 360° wrap applies.
   h.Add(scan.angles.azimuth.data(), scan.angles.azimuth.size() * sizeof(float));
   const std::string opencv = CV_VERSION;  // another OpenCV may detect differently

@@ -34,9 +34,49 @@ cv::Mat WrapPad(const cv::Mat& image, int margin) {
   return padded;
 }
 
+// The 8-bit image at half size: each pixel the rounded mean of a 2 x 2 block (an odd last row or
+// column counts twice). Pixel (r, c) of the result is centred on (2c + 0.5, 2r + 0.5) of the input.
+cv::Mat HalveImage(const cv::Mat& image) {
+  const int rows = (image.rows + 1) / 2, cols = (image.cols + 1) / 2;
+  cv::Mat out(rows, cols, CV_8UC1);
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* a = image.ptr<std::uint8_t>(2 * r);
+    const std::uint8_t* b = image.ptr<std::uint8_t>(std::min(2 * r + 1, image.rows - 1));
+    std::uint8_t* o = out.ptr<std::uint8_t>(r);
+    for (int c = 0; c < cols; ++c) {
+      const int c0 = 2 * c, c1 = std::min(2 * c + 1, image.cols - 1);
+      o[c] = static_cast<std::uint8_t>((a[c0] + a[c1] + b[c0] + b[c1] + 2) / 4);
+    }
+  }
+  return out;
+}
+
+// The valid-cell mask at half size: a pixel is valid only when all four cells under it are.
+cv::Mat HalveMask(const cv::Mat& mask) {
+  const int rows = (mask.rows + 1) / 2, cols = (mask.cols + 1) / 2;
+  cv::Mat out(rows, cols, CV_8UC1);
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* a = mask.ptr<std::uint8_t>(2 * r);
+    const std::uint8_t* b = mask.ptr<std::uint8_t>(std::min(2 * r + 1, mask.rows - 1));
+    std::uint8_t* o = out.ptr<std::uint8_t>(r);
+    for (int c = 0; c < cols; ++c) {
+      const int c0 = 2 * c, c1 = std::min(2 * c + 1, mask.cols - 1);
+      o[c] = a[c0] & a[c1] & b[c0] & b[c1];
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
+int SiftImageScale(int cols, const SiftOptions& options) {
+  return options.half_size_from_cols > 0 && cols >= options.half_size_from_cols ? 2 : 1;
+}
+
 int SiftStrips(int rows, int cols, const SiftOptions& options) {
+  const int scale = SiftImageScale(cols, options);
+  rows = (rows + scale - 1) / scale;
+  cols = (cols + scale - 1) / scale;
   const std::int64_t pixels = std::int64_t(std::max(rows, 0)) * std::max(cols, 0);
   if (options.strip_pixels <= 0 || pixels <= options.strip_pixels) return 1;
   const int strips = int((pixels + options.strip_pixels - 1) / options.strip_pixels);
@@ -45,6 +85,9 @@ int SiftStrips(int rows, int cols, const SiftOptions& options) {
 
 std::size_t SiftStripPixels(int rows, int cols, const SiftOptions& options) {
   const int strips = SiftStrips(rows, cols, options);
+  const int scale = SiftImageScale(cols, options);
+  rows = (rows + scale - 1) / scale;
+  cols = (cols + scale - 1) / scale;
   if (strips == 1) return std::size_t(std::max(rows, 0)) * std::size_t(std::max(cols, 0));
   return std::size_t(rows) * std::size_t(cols / strips + 1 + 2 * kStripOverlapPx + kStripAlignPx);
 }
@@ -65,6 +108,8 @@ Status SiftOptions::Validate() const {
   if (wrap_margin_px < 0 || wrap_margin_px > 1000)
     return bad("wrap_margin_px must be in [0, 1000], got " + std::to_string(wrap_margin_px));
   if (strip_pixels < 0) return bad("strip_pixels must be >= 0 (0 = whole), got " + std::to_string(strip_pixels));
+  if (half_size_from_cols < 0)
+    return bad("half_size_from_cols must be >= 0 (0 = always full size), got " + std::to_string(half_size_from_cols));
   return Status::Ok();
 }
 
@@ -76,19 +121,26 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   out.cols = scan.cols;
   if (scan.rows < 8 || scan.cols < 8) return out;  // too small for any SIFT keypoint
 
-  const cv::Mat panorama = ReflectancePanorama(scan);
+  // The detection image: the panorama, at half size for a wide one (SiftImageScale).
+  const int scale = SiftImageScale(scan.cols, options);
+  cv::Mat panorama = ReflectancePanorama(scan);
   cv::Mat mask(scan.rows, scan.cols, CV_8UC1);
   for (int r = 0; r < scan.rows; ++r) {
     auto* row = mask.ptr<std::uint8_t>(r);
     for (int c = 0; c < scan.cols; ++c) row[c] = scan.IsValid(r, c) ? 255 : 0;
   }
+  if (scale == 2) {
+    panorama = HalveImage(panorama);
+    mask = HalveMask(mask);
+  }
+  const int cols = panorama.cols;
 
   const bool wrap = options.wrap_margin_px > 0 && CoversFullCircle(scan);
-  const int margin = wrap ? std::min(options.wrap_margin_px, scan.cols) : 0;
+  const int margin = wrap ? std::min((options.wrap_margin_px + scale - 1) / scale, cols) : 0;
   cv::Mat image = wrap ? WrapPad(panorama, margin) : panorama;
   if (wrap) mask = WrapPad(mask, margin);
-  if (options.mask_erosion_px > 0) {
-    const int k = 2 * options.mask_erosion_px + 1;
+  if (const int erosion = (options.mask_erosion_px + scale - 1) / scale; erosion > 0) {
+    const int k = 2 * erosion + 1;
     // Outside the image counts as valid: only empty cells erode the mask, not the image border.
     cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)), cv::Point(-1, -1), 1,
               cv::BORDER_CONSTANT, cv::Scalar(255));
@@ -104,7 +156,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   std::vector<cv::Mat> strip_descriptors(strips);
   std::vector<std::pair<int, int>> descriptor_of;  // per keypoint: its strip and row there
   for (int k = 0; k < strips; ++k) {
-    const int c0 = int(std::int64_t(scan.cols) * k / strips), c1 = int(std::int64_t(scan.cols) * (k + 1) / strips);
+    const int c0 = int(std::int64_t(cols) * k / strips), c1 = int(std::int64_t(cols) * (k + 1) / strips);
     // A strip starts on a multiple of kStripAlignPx of the (padded) panorama, so that its octaves
     // sample the same pixels as the whole panorama's.
     const int a = strips > 1 ? std::max(0, (c0 + margin - kStripOverlapPx) / kStripAlignPx * kStripAlignPx) : 0;
@@ -116,9 +168,15 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
       return MakeError(ErrorCode::kFailed, "SIFT on scan '" + scan.name + "' returned descriptors of an unexpected type");
     for (int i = 0; i < static_cast<int>(found.size()); ++i) {
       cv::KeyPoint kp = found[i];
-      kp.pt.x += float(a);  // padded image coordinates
-      const int c = static_cast<int>(std::lround(kp.pt.x - margin));
+      kp.pt.x += float(a);  // detection-image coordinates, padded
+      kp.pt.x -= float(margin);  // and unpadded
+      const int c = static_cast<int>(std::lround(kp.pt.x));
       if (c < c0 || c >= c1) continue;  // another strip's (or the padding's)
+      // Back to the panorama's pixels: detection pixel (x, y) is centred on (2x + 0.5, 2y + 0.5) at half size.
+      const float offset = 0.5f * float(scale - 1);
+      kp.pt.x = float(scale) * kp.pt.x + offset;
+      kp.pt.y = float(scale) * kp.pt.y + offset;
+      kp.size *= float(scale);
       cv_keypoints.push_back(kp);
       descriptor_of.emplace_back(k, i);
     }
@@ -128,8 +186,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   std::vector<int> keep;
   keep.reserve(cv_keypoints.size());
   for (int i = 0; i < static_cast<int>(cv_keypoints.size()); ++i) {
-    const float u = cv_keypoints[i].pt.x - margin;
-    const int c = static_cast<int>(std::lround(u));
+    const int c = static_cast<int>(std::lround(cv_keypoints[i].pt.x));
     const int r = static_cast<int>(std::lround(cv_keypoints[i].pt.y));
     if (c < 0 || c >= scan.cols || r < 0 || r >= scan.rows) continue;
     if (!scan.IsValid(r, c)) continue;  // the mask already ensures this; kept as a guarantee
@@ -151,7 +208,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   out.descriptors.resize(keep.size() * kSiftDescriptorSize);
   for (std::size_t k = 0; k < keep.size(); ++k) {
     const cv::KeyPoint& kp = cv_keypoints[keep[k]];
-    out.keypoints.push_back(Keypoint{kp.pt.x - margin, kp.pt.y, kp.size, kp.angle, kp.response});
+    out.keypoints.push_back(Keypoint{kp.pt.x, kp.pt.y, kp.size, kp.angle, kp.response});
     const auto [strip, row] = descriptor_of[keep[k]];
     std::copy_n(strip_descriptors[strip].ptr<float>(row), kSiftDescriptorSize,
                 out.descriptors.data() + k * kSiftDescriptorSize);

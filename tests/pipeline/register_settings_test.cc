@@ -19,6 +19,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   options.global = false;
   options.keep_imported = true;
   options.geometric.coarse_scale = 3.0;
+  options.sift.half_size_from_cols = 2400;
   std::map<std::string, std::string> settings{{"simulated.seed", "3"}};
   StoreRegisterSettings(options, &settings);
   EXPECT_EQ(settings.at("register.coarse"), "none");
@@ -34,6 +35,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   EXPECT_FALSE(back->global);
   EXPECT_TRUE(back->keep_imported);
   EXPECT_EQ(back->geometric.coarse_scale, 3.0);
+  EXPECT_EQ(back->sift.half_size_from_cols, 2400);
   // Every setting's value, applied to the defaults, gives the value back.
   for (const RegisterSetting& s : RegisterSettings()) {
     RegisterOptions fresh;
@@ -58,6 +60,10 @@ TEST(RegisterSettings, BadValuesNameTheSettingNotAFlag) {
   EXPECT_FALSE(RegisterOptionsFromSettings(settings).ok());
   settings = {{"register.ratio", "0.9x"}};
   EXPECT_FALSE(RegisterOptionsFromSettings(settings).ok());
+  settings = {{"register.sift_half_size_cols", "2000.5"}};
+  r = RegisterOptionsFromSettings(settings);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("whole number of columns"), std::string::npos) << r.error().message;
   settings = {{"register.colour", "red"}};
   r = RegisterOptionsFromSettings(settings);
   ASSERT_FALSE(r.ok());
