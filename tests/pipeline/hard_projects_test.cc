@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <random>
+#include <unordered_set>
 
 #include "core/geometry/transform.h"
 #include "core/io/scan_file.h"
@@ -282,6 +284,40 @@ TEST(HardProjects, UnorganizedExports) {
     scans.push_back(std::move(scan));
   }
   ExpectAllRegisteredAndNoWrongLink(scans, Register(scans, RegisterOptions{}));
+}
+
+// The plan view's wall map does not depend on the resolution: one station scanned at 1000 x 250
+// and at W's 3000 x 750 shows the same walls. Walls were found up a column within a fixed 8 rows —
+// 2.9° at 1000 x 250, 0.96° at 3000 x 750 — so at the finer resolution only walls at least 19 m
+// away were mapped (6.5 m at the coarser), and stations 25 m apart got wrong plan-view poses.
+TEST(HardProjects, PlanViewMapsTheSameWallsAtAnyResolution) {
+  std::vector<std::unordered_set<std::int64_t>> occupied;  // 0.5 m cells holding a wall
+  for (const auto& [cols, rows] : {std::make_pair(1000, 250), std::make_pair(3000, 750)}) {
+    const std::vector<Scan> scans = Simulate({1, cols, rows, 25.0, false, 5});
+    ASSERT_EQ(scans.size(), 1u);
+    GeometricOptions g;
+    g.voxel_m = SuggestVoxel(scans[0]);
+    CancelToken cancel;
+    Expected<GeometricFeatures> f = DetectGeometricFeatures(scans[0], g, cancel);
+    ASSERT_TRUE(f.ok()) << f.error().ToString();
+    const PlanView view = MakePlanView(*f, scans[0]);
+    ASSERT_TRUE(view.usable);
+    std::unordered_set<std::int64_t> cells;
+    for (const Eigen::Vector2d& p : view.wall_xy)
+      cells.insert(std::int64_t(std::floor(p.x() / 0.5)) * 100000 + std::int64_t(std::floor(p.y() / 0.5)));
+    occupied.push_back(std::move(cells));
+  }
+  int shared = 0;  // the coarser map's wall cells with a wall at the finer resolution there or next to it
+  for (std::int64_t c : occupied[0]) {
+    bool found = false;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy) found |= occupied[1].count(c + dx * 100000 + dy) > 0;
+    shared += found;
+  }
+  std::printf("wall cells: %zu at 1000 x 250, %zu at 3000 x 750, %d of the first at or next to one of the second\n",
+              occupied[0].size(), occupied[1].size(), shared);
+  EXPECT_GE(occupied[0].size(), 100u);
+  EXPECT_GE(shared, 0.95 * occupied[0].size());
 }
 
 // The plan-view search alone (no correspondence): two levelled scans 15 m apart, the best
