@@ -34,9 +34,10 @@ cv::Mat WrapPad(const cv::Mat& image, int margin) {
   return padded;
 }
 
-// The 8-bit image at half size: each pixel the rounded mean of a 2 x 2 block (an odd last row or
-// column counts twice). Pixel (r, c) of the result is centred on (2c + 0.5, 2r + 0.5) of the input.
-cv::Mat HalveImage(const cv::Mat& image) {
+// An 8-bit image at half size: each pixel `combine` of a 2 x 2 block (an odd last row or column
+// counts twice). Pixel (r, c) of the result is centred on (2c + 0.5, 2r + 0.5) of the input.
+template <typename Combine>
+cv::Mat Halve(const cv::Mat& image, Combine combine) {
   const int rows = (image.rows + 1) / 2, cols = (image.cols + 1) / 2;
   cv::Mat out(rows, cols, CV_8UC1);
   for (int r = 0; r < rows; ++r) {
@@ -45,26 +46,20 @@ cv::Mat HalveImage(const cv::Mat& image) {
     std::uint8_t* o = out.ptr<std::uint8_t>(r);
     for (int c = 0; c < cols; ++c) {
       const int c0 = 2 * c, c1 = std::min(2 * c + 1, image.cols - 1);
-      o[c] = static_cast<std::uint8_t>((a[c0] + a[c1] + b[c0] + b[c1] + 2) / 4);
+      o[c] = static_cast<std::uint8_t>(combine(a[c0], a[c1], b[c0], b[c1]));
     }
   }
   return out;
 }
 
+// The panorama at half size: the rounded mean of each block.
+cv::Mat HalveImage(const cv::Mat& image) {
+  return Halve(image, [](int a, int b, int c, int d) { return (a + b + c + d + 2) / 4; });
+}
+
 // The valid-cell mask at half size: a pixel is valid only when all four cells under it are.
 cv::Mat HalveMask(const cv::Mat& mask) {
-  const int rows = (mask.rows + 1) / 2, cols = (mask.cols + 1) / 2;
-  cv::Mat out(rows, cols, CV_8UC1);
-  for (int r = 0; r < rows; ++r) {
-    const std::uint8_t* a = mask.ptr<std::uint8_t>(2 * r);
-    const std::uint8_t* b = mask.ptr<std::uint8_t>(std::min(2 * r + 1, mask.rows - 1));
-    std::uint8_t* o = out.ptr<std::uint8_t>(r);
-    for (int c = 0; c < cols; ++c) {
-      const int c0 = 2 * c, c1 = std::min(2 * c + 1, mask.cols - 1);
-      o[c] = a[c0] & a[c1] & b[c0] & b[c1];
-    }
-  }
-  return out;
+  return Halve(mask, [](int a, int b, int c, int d) { return a & b & c & d; });
 }
 
 }  // namespace
