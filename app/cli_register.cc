@@ -260,7 +260,7 @@ int RunRegister(const std::vector<std::string>& argv) {
        {"sift-half-size-cols", true, false,
         "N        detect SIFT on a half-size panorama when a scan is at least N columns wide: OpenCV's SIFT "
         "doubles its input, so a finely sampled panorama (the paper's 3000 x 750) gives the same blobs at a "
-        "quarter of the pixels (default 0: always full size)"},
+        "quarter of the pixels (default 2000; 0: always full size)"},
        {"coarse-scale", true, false,
         "X        also FPFH descriptors at X times the voxel, matched scale with scale: stations far apart "
         "(a busy street 12 m apart: 6 of 6 scans instead of 2) — but in repetitive interiors they also "

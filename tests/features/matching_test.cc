@@ -164,7 +164,10 @@ TEST(HalfSizeSift, FindsTheFullSizeBlobsAtTheirPlacesAndMatchesAsTruly) {
   half.half_size_from_cols = scans[0].cols;
   ASSERT_EQ(SiftImageScale(scans[0].cols, half), 2);
   ASSERT_EQ(SiftImageScale(scans[0].cols - 1, half), 1);
-  const auto fa = DetectFeatures(scans[0]), fb = DetectFeatures(scans[1]);
+  SiftOptions full;
+  full.half_size_from_cols = 0;
+  ASSERT_EQ(SiftImageScale(scans[0].cols, full), 1);
+  const auto fa = DetectFeatures(scans[0], full), fb = DetectFeatures(scans[1], full);
   const auto ha = DetectFeatures(scans[0], half), hb = DetectFeatures(scans[1], half);
   ASSERT_TRUE(fa.ok() && fb.ok() && ha.ok() && hb.ok());
   ASSERT_GT(ha->size(), 500);

@@ -123,10 +123,12 @@ TEST(SiftTest, MaxFeaturesKeepsTheStrongest) {
 // coarse scales — and none twice across a border. Here W's 3000 x 750 in 4 strips.
 TEST(SiftTest, StripsFindTheWholePanoramasKeypointsOnce) {
   const Scan& scan = test::FullSizePair().at(0);
-  SiftOptions whole_options;
+  SiftOptions whole_options;  // at full size
   whole_options.strip_pixels = 0;
+  whole_options.half_size_from_cols = 0;
   SiftOptions strip_options;
   strip_options.strip_pixels = scan.size() / 4;
+  strip_options.half_size_from_cols = 0;
   ASSERT_EQ(SiftStrips(scan.rows, scan.cols, whole_options), 1);
   ASSERT_EQ(SiftStrips(scan.rows, scan.cols, strip_options), 4);
   EXPECT_LT(SiftStripPixels(scan.rows, scan.cols, strip_options), scan.size() / 2);
