@@ -167,10 +167,12 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
       kp.pt.x -= float(margin);  // and unpadded
       const int c = static_cast<int>(std::lround(kp.pt.x));
       if (c < c0 || c >= c1) continue;  // another strip's (or the padding's)
-      // Back to the panorama's pixels: detection pixel (x, y) is centred on (2x + 0.5, 2y + 0.5) at half size.
-      const float offset = 0.5f * float(scale - 1);
-      kp.pt.x = float(scale) * kp.pt.x + offset;
-      kp.pt.y = float(scale) * kp.pt.y + offset;
+      // Back to the panorama's pixels. Half-size pixel (x, y) is centred on (2x + 0.5, 2y + 0.5), and
+      // OpenCV reports positions a quarter of its input's pixel past the truth (it doubles the image
+      // centre-aligned, then halves the coordinates): at half size that quarter is half a full-size
+      // pixel, and the two cancel. (At full size the quarter pixel stays, as it always has.)
+      kp.pt.x *= float(scale);
+      kp.pt.y *= float(scale);
       kp.size *= float(scale);
       cv_keypoints.push_back(kp);
       descriptor_of.emplace_back(k, i);

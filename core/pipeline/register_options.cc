@@ -47,7 +47,7 @@ Status LinkThresholds::Validate() const {
       !(weak_rms_m > 0 && weak_rms_m <= max_rms_m) || !(weak_conflict >= 0 && weak_conflict <= max_conflict) ||
       !(plan_view_conflict >= 0 && plan_view_conflict <= weak_conflict)) {
     return MakeError(ErrorCode::kInvalidArgument,
-                     "link thresholds: need weak_inliers >= 3, 0 <= min_overlap <= weak_overlap <= 1 "
+                     "link thresholds: need weak_inliers >= 3, 0 <= min_overlap <= weak_overlap <= 1, "
                      "0 < weak_rms <= max_rms and 0 <= plan_view_conflict <= weak_conflict <= max_conflict");
   }
   return Status::Ok();

@@ -583,20 +583,14 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
                   Format(" and turned %.0f° fits the surfaces too", RotationAngle(other_from_best.linear()) * 180.0 / M_PI) +
                   Format(" (overlap %.1f %% there, ", 100 * other->evidence.overlap) +
                   Format("%.1f %% here, neither in the other scanner's free space): a symmetric or repeated layout", 100 * best.evidence.overlap);
-  } else if (link.conflict > options.thresholds.plan_view_conflict || link.moving > options.thresholds.weak_conflict) {
-    // Static conflicts: the truth leaves almost none (LinkThresholds::plan_view_conflict).
+  } else if (link.moving > options.thresholds.weak_conflict) {
     // Object-sized conflicts are traffic at the true pose, but also the posts and cars of a pose
     // turned or shifted along a symmetric street (measured: a 180° turn, 1.3 % static and 12.6 %
     // object-sized conflict): without features to tell, the link is weak, so its loop is checked.
-    const bool statics = link.conflict > options.thresholds.plan_view_conflict;
     link.status = io::LinkStatus::kWeak;
-    link.reason = statics ? Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
-                                   "scanner's free space, where a true pose leaves almost none; a loop confirms it",
-                                   100 * link.conflict)
-                          : Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
-                                   "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop "
-                                   "confirms it",
-                                   100 * link.moving);
+    link.reason = Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
+                         "scanner's free space on object-sized clusters (traffic, or a wrong pose); a loop confirms it",
+                         100 * link.moving);
     result.needs_loop = true;
   } else if (SameSpot(parent, child, best.parent_from_child, 0.2) && best.evidence.ViolationRate() >= kClearViolationRate) {
     // A look-alike spot that free space refutes (FreeSpaceRefutes) is no twin: measured on an
@@ -616,6 +610,14 @@ PairResult RegisterPair(const PreparedScan& parent, const PreparedScan& child, c
                          best.parent_from_child.translation().norm());
     result.needs_loop = true;
     result.same_spot = true;
+  } else if (link.conflict > options.thresholds.plan_view_conflict) {
+    // Static conflicts: a true pose leaves almost none (LinkThresholds::plan_view_conflict). After
+    // the twin-spot rules above: a loop closes through a twin pose as readily as through the truth.
+    link.status = io::LinkStatus::kWeak;
+    link.reason = Format("plan-view pose without feature support; %.1f %% of the points lie in the other "
+                         "scanner's free space, where a true pose leaves almost none; a loop confirms it",
+                         100 * link.conflict);
+    result.needs_loop = true;
   } else {
     link.status = io::LinkStatus::kOk;
     link.reason.clear();
