@@ -43,7 +43,7 @@ struct SiftOptions {
   // octave, so on a finely sampled panorama (the paper's 3000 x 750: 0.12° a cell) half size finds
   // the blobs a sampling half as fine has, at a quarter of the pixels. 0: always full size.
   // Measured on the 18 regression projects at 3000 x 750: features 6.0-6.4 -> 4.6-5.3 s on the
-  // 8-station street; 81 of 120 scans registered instead of 75, none placed by a wrong pose either way.
+  // 8-station street; 81 of 120 scans registered instead of 75, none wrong either way.
   int half_size_from_cols = 2000;
 
   Status Validate() const;
