@@ -257,10 +257,10 @@ int RunRegister(const std::vector<std::string>& argv) {
         "max(8 x noise, 2 x point spacing, extent / 100); with --coarse none also how far apart the "
         "current poses are)"},
        {"ratio", true, false, "T        descriptor ratio threshold t_des (default 0.66, W)"},
-       {"sift-half-size-cols", true, false,
-        "N        detect SIFT on a half-size panorama when a scan is at least N columns wide: OpenCV's SIFT "
-        "doubles its input, so a finely sampled panorama (the paper's 3000 x 750) gives the same blobs at a "
-        "quarter of the pixels (default 2000; 0: always full size)"},
+       {"sift-half-size-step", true, false,
+        "DEG      detect SIFT on a half-size panorama when a scan seen from one spot has its cells at most DEG "
+        "apart in both directions: OpenCV's SIFT doubles its input, so a finely sampled panorama (the paper's "
+        "3000 x 750, 0.12°) gives the same blobs at a quarter of the pixels (default 0.18; 0: always full size)"},
        {"coarse-scale", true, false,
         "X        also FPFH descriptors at X times the voxel, matched scale with scale: stations far apart "
         "(a busy street 12 m apart: 6 of 6 scans instead of 2) — but in repetitive interiors they also "

@@ -104,12 +104,12 @@ std::uint64_t FeatureCacheKey(const Scan& scan, const SiftOptions& options) {
   h.AddValue(static_cast<std::int64_t>(options.mask_erosion_px));
   h.AddValue(static_cast<std::int64_t>(options.wrap_margin_px));
   // Strips (a large panorama): they change the keypoints near their borders.
-  if (const int strips = SiftStrips(scan.rows, scan.cols, options); strips > 1) {
+  if (const int strips = SiftStrips(scan, options); strips > 1) {
     h.AddValue(static_cast<std::int64_t>(strips));
     h.AddValue(static_cast<std::int64_t>(kStripOverlapPx));
   }
   // A half-size detection image (a wide panorama) finds other keypoints.
-  if (const int scale = SiftImageScale(scan.cols, options); scale > 1) h.AddValue(static_cast<std::int64_t>(scale));
+  if (const int scale = SiftImageScale(scan, options); scale > 1) h.AddValue(static_cast<std::int64_t>(scale));
   // The angular grid decides whether the 360° wrap applies.
   h.Add(scan.angles.azimuth.data(), scan.angles.azimuth.size() * sizeof(float));
   const std::string opencv = CV_VERSION;  // another OpenCV may detect differently

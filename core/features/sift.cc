@@ -64,25 +64,42 @@ cv::Mat HalveMask(const cv::Mat& mask) {
 
 }  // namespace
 
-int SiftImageScale(int cols, const SiftOptions& options) {
-  return options.half_size_from_cols > 0 && cols >= options.half_size_from_cols ? 2 : 1;
+int SiftImageScale(const Scan& scan, const SiftOptions& options) {
+  const double max_step = options.half_size_max_step_deg * kPi / 180.0;
+  if (!(max_step > 0) || !scan.single_viewpoint || scan.angles.empty() || scan.rows < 2 || scan.cols < 2 ||
+      static_cast<int>(scan.angles.azimuth.size()) != scan.cols ||
+      static_cast<int>(scan.angles.elevation.size()) != scan.rows)
+    return 1;
+  double az = 0;  // the mean column step, the seam's wrap left out
+  for (int c = 0; c + 1 < scan.cols; ++c)
+    az += std::abs(std::remainder(static_cast<double>(scan.angles.azimuth[c + 1]) - scan.angles.azimuth[c], 2 * kPi));
+  az /= scan.cols - 1;
+  const double el =
+      std::abs(static_cast<double>(scan.angles.elevation.back()) - scan.angles.elevation.front()) / (scan.rows - 1);
+  return std::isfinite(az) && std::isfinite(el) && az > 0 && el > 0 && az <= max_step && el <= max_step ? 2 : 1;
 }
 
-int SiftStrips(int rows, int cols, const SiftOptions& options) {
-  const int scale = SiftImageScale(cols, options);
-  rows = (rows + scale - 1) / scale;
-  cols = (cols + scale - 1) / scale;
+namespace {
+
+// The strips of a rows x cols detection image (SiftOptions::strip_pixels).
+int StripsOf(int rows, int cols, const SiftOptions& options) {
   const std::int64_t pixels = std::int64_t(std::max(rows, 0)) * std::max(cols, 0);
   if (options.strip_pixels <= 0 || pixels <= options.strip_pixels) return 1;
   const int strips = int((pixels + options.strip_pixels - 1) / options.strip_pixels);
   return std::clamp(strips, 1, std::max(1, cols / (2 * kStripOverlapPx)));  // strips wider than their overlaps
 }
 
-std::size_t SiftStripPixels(int rows, int cols, const SiftOptions& options) {
-  const int strips = SiftStrips(rows, cols, options);
-  const int scale = SiftImageScale(cols, options);
-  rows = (rows + scale - 1) / scale;
-  cols = (cols + scale - 1) / scale;
+}  // namespace
+
+int SiftStrips(const Scan& scan, const SiftOptions& options) {
+  const int scale = SiftImageScale(scan, options);
+  return StripsOf((scan.rows + scale - 1) / scale, (scan.cols + scale - 1) / scale, options);
+}
+
+std::size_t SiftStripPixels(const Scan& scan, const SiftOptions& options) {
+  const int scale = SiftImageScale(scan, options);
+  const int rows = (scan.rows + scale - 1) / scale, cols = (scan.cols + scale - 1) / scale;
+  const int strips = StripsOf(rows, cols, options);
   if (strips == 1) return std::size_t(std::max(rows, 0)) * std::size_t(std::max(cols, 0));
   return std::size_t(rows) * std::size_t(cols / strips + 1 + 2 * kStripOverlapPx + kStripAlignPx);
 }
@@ -103,8 +120,9 @@ Status SiftOptions::Validate() const {
   if (wrap_margin_px < 0 || wrap_margin_px > 1000)
     return bad("wrap_margin_px must be in [0, 1000], got " + std::to_string(wrap_margin_px));
   if (strip_pixels < 0) return bad("strip_pixels must be >= 0 (0 = whole), got " + std::to_string(strip_pixels));
-  if (half_size_from_cols < 0)
-    return bad("half_size_from_cols must be >= 0 (0 = always full size), got " + std::to_string(half_size_from_cols));
+  if (!(half_size_max_step_deg >= 0 && half_size_max_step_deg <= 10))
+    return bad("half_size_max_step_deg must be in [0, 10] degrees (0 = always full size), got " +
+               std::to_string(half_size_max_step_deg));
   return Status::Ok();
 }
 
@@ -116,8 +134,8 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   out.cols = scan.cols;
   if (scan.rows < 8 || scan.cols < 8) return out;  // too small for any SIFT keypoint
 
-  // The detection image: the panorama, at half size for a wide one (SiftImageScale).
-  const int scale = SiftImageScale(scan.cols, options);
+  // The detection image: the panorama, at half size for a finely sampled one (SiftImageScale).
+  const int scale = SiftImageScale(scan, options);
   cv::Mat panorama = ReflectancePanorama(scan);
   cv::Mat mask(scan.rows, scan.cols, CV_8UC1);
   for (int r = 0; r < scan.rows; ++r) {
@@ -134,7 +152,10 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   const int margin = wrap ? std::min((options.wrap_margin_px + scale - 1) / scale, cols) : 0;
   cv::Mat image = wrap ? WrapPad(panorama, margin) : panorama;
   if (wrap) mask = WrapPad(mask, margin);
-  if (const int erosion = (options.mask_erosion_px + scale - 1) / scale; erosion > 0) {
+  // At half size a keypoint's full-size cell lies up to a cell beyond its half-size pixel's two, so
+  // the mask erodes by one more full-size cell: the cells within mask_erosion_px stay valid.
+  if (const int erosion = options.mask_erosion_px > 0 ? (options.mask_erosion_px + 2 * (scale - 1)) / scale : 0;
+      erosion > 0) {
     const int k = 2 * erosion + 1;
     // Outside the image counts as valid: only empty cells erode the mask, not the image border.
     cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)), cv::Point(-1, -1), 1,
@@ -146,7 +167,7 @@ Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& optio
   // Column strips of a large panorama, each with kStripOverlapPx of its neighbours' columns (or
   // the wrap padding), keeping the keypoints centred in its own columns: SIFT's pyramids are one
   // strip's, not the whole panorama's (issue 13: ~1.6 GB on a 10 M-pixel panorama).
-  const int strips = SiftStrips(scan.rows, scan.cols, options);
+  const int strips = SiftStrips(scan, options);
   std::vector<cv::KeyPoint> cv_keypoints;
   std::vector<cv::Mat> strip_descriptors(strips);
   std::vector<std::pair<int, int>> descriptor_of;  // per keypoint: its strip and row there

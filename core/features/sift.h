@@ -38,13 +38,15 @@ struct SiftOptions {
   // kStripOverlapPx columns of its neighbours: SIFT's memory (~160 bytes a pixel) is one strip's
   // (issue 13: ~1.6 GB on a 10 M-pixel panorama). 0: always whole. The paper's 3000 x 750 is whole.
   std::int64_t strip_pixels = 2'500'000;
-  // A panorama at least this many columns wide is detected at half size (2 x 2 cells averaged),
-  // its keypoints mapped back to full-size pixels. OpenCV's SIFT doubles its input for the first
-  // octave, so on a finely sampled panorama (the paper's 3000 x 750: 0.12° a cell) half size finds
-  // the blobs a sampling half as fine has, at a quarter of the pixels. 0: always full size.
+  // A panorama seen from one spot whose cells are at most this many degrees apart in both
+  // directions is detected at half size (2 x 2 cells averaged), its keypoints mapped back to
+  // full-size pixels. OpenCV's SIFT doubles its input for the first octave, so on a finely sampled
+  // panorama (the paper's 3000 x 750: 0.12° a cell) half size finds the blobs a sampling half as
+  // fine has, at a quarter of the pixels. A Velodyne's ring image (0.09° columns, 0.4° rows) or a
+  // cloud merged from several stations keeps its full size. 0: always full size.
   // Measured on the 18 regression projects at 3000 x 750: features 6.0-6.4 -> 4.6-5.3 s on the
   // 8-station street; 81 of 120 scans registered instead of 75, none wrong either way.
-  int half_size_from_cols = 2000;
+  double half_size_max_step_deg = 0.18;
 
   Status Validate() const;
 };
@@ -67,11 +69,11 @@ struct ScanFeatures {
 // larger than options.strip_pixels is detected strip by strip (SiftStrips). Keypoints are sorted by decreasing response
 // (ties: by v, then u), so the result is deterministic. Thread-safe (no shared state).
 Expected<ScanFeatures> DetectFeatures(const Scan& scan, const SiftOptions& options = {});
-// 2 when DetectFeatures works on a half-size image of a panorama this wide (half_size_from_cols), else 1.
-int SiftImageScale(int cols, const SiftOptions& options);
-// The strips DetectFeatures cuts a rows x cols panorama into (1: whole), and the most pixels one
+// 2 when DetectFeatures works on a half-size image of the scan's panorama (half_size_max_step_deg), else 1.
+int SiftImageScale(const Scan& scan, const SiftOptions& options);
+// The strips DetectFeatures cuts the scan's panorama into (1: whole), and the most pixels one
 // strip's detection works on (of the half-size image, when SiftImageScale is 2).
-int SiftStrips(int rows, int cols, const SiftOptions& options);
-std::size_t SiftStripPixels(int rows, int cols, const SiftOptions& options);
+int SiftStrips(const Scan& scan, const SiftOptions& options);
+std::size_t SiftStripPixels(const Scan& scan, const SiftOptions& options);
 
 }  // namespace scanreg

@@ -204,7 +204,7 @@ Expected<ProjectRegistration> RegisterScans(ScanStore& store, const UserChoices&
   // that fits (one always runs). A large panorama is detected strip by strip (SiftStrips): one
   // strip's pixels count.
   constexpr std::size_t kSiftBytesPerPixel = 160;
-  auto sift_pixels = [&](const Scan& s) { return SiftStripPixels(s.rows, s.cols, options.sift); };
+  auto sift_pixels = [&](const Scan& s) { return SiftStripPixels(s, options.sift); };
   MemoryGate sift_memory(store.budget_bytes());
   std::vector<PreparedScan> prepared(n);
   std::vector<Status> prepared_ok(n, Status::Ok());

@@ -77,7 +77,7 @@ const std::vector<RegisterSetting>& RegisterSettings() {
       {"register.features", "features", "correspondences", Names(AllFeatureSources(), FeatureSourcesName)},
       {"register.fine", "fine", "fine method", Names(AllFineMethods(), FineMethodName)},
       {"register.ratio", "ratio", "descriptor ratio t_des", {}},
-      {"register.sift_half_size_cols", "sift-half-size-cols", "SIFT on a half-size panorama from this many columns (0: always full size)", {}},
+      {"register.sift_half_size_step_deg", "sift-half-size-step", "SIFT on a half-size panorama when its cells are at most this far apart (°; 0: always full size)", {}},
       {"register.coarse_scale", "coarse-scale", "coarse FPFH scale (x the voxel; 0: fine scale only)", {}},
       {"register.noise_m", "noise", "range noise (m; 0: from the data)", {}},
       {"register.overlap_distance_m", "overlap-distance", "overlap distance (m; 0: from the data)", {}},
@@ -100,7 +100,7 @@ std::string RegisterSettingValue(const RegisterOptions& o, const RegisterSetting
   if (key == "register.fine") return FineMethodName(o.fine);
   if (key == "register.features") return FeatureSourcesName(o.features);
   if (key == "register.ratio") return Number(o.match.ratio);
-  if (key == "register.sift_half_size_cols") return std::to_string(o.sift.half_size_from_cols);
+  if (key == "register.sift_half_size_step_deg") return Number(o.sift.half_size_max_step_deg);
   if (key == "register.coarse_scale") return Number(o.geometric.coarse_scale);
   if (key == "register.noise_m") return Number(o.range_sigma_m);
   if (key == "register.overlap_distance_m") return Number(o.overlap_distance_m);
@@ -140,13 +140,7 @@ Status ApplyRegisterSetting(const RegisterSetting& s, const std::string& value, 
   if (key == "register.fine") return SetChoice(s, value, AllFineMethods(), FineMethodName, &o->fine);
   if (key == "register.features") return SetChoice(s, value, AllFeatureSources(), FeatureSourcesName, &o->features);
   if (key == "register.ratio") return SetNumber(s, value, 0.05, 1.0, &o->match.ratio);
-  if (key == "register.sift_half_size_cols") {
-    double cols = 0;
-    if (Status st = SetNumber(s, value, 0.0, 1e6, &cols); !st) return st;
-    if (cols != std::floor(cols)) return Bad(s, value, "give a whole number of columns (0: always full size)");
-    o->sift.half_size_from_cols = static_cast<int>(cols);
-    return Status::Ok();
-  }
+  if (key == "register.sift_half_size_step_deg") return SetNumber(s, value, 0.0, 10.0, &o->sift.half_size_max_step_deg);
   if (key == "register.coarse_scale") {
     if (Status st = SetNumber(s, value, 0.0, 20.0, &o->geometric.coarse_scale); !st) return st;
     if (o->geometric.coarse_scale != 0 && o->geometric.coarse_scale <= 1.0)

@@ -154,19 +154,23 @@ double FractionClose(const std::vector<FeatureMatch>& matches, const Scan& sa, c
   return static_cast<double>(close) / std::max(*with_points, 1);
 }
 
-// Issue 36: a wide panorama detected at half size (SiftOptions::half_size_from_cols). OpenCV's SIFT
+// Issue 36: a finely sampled panorama detected at half size (SiftOptions::half_size_max_step_deg). OpenCV's SIFT
 // doubles its input, so the half-size image's first octave samples the full-size panorama: the
 // blobs found are the full size's at their places (mapped back to full-size pixels), none on an
 // empty cell, and they match between two stations as truly as the full size's do.
 TEST(HalfSizeSift, FindsTheFullSizeBlobsAtTheirPlacesAndMatchesAsTruly) {
   const auto& scans = test::FullSizePair();
-  SiftOptions half;
-  half.half_size_from_cols = scans[0].cols;
-  ASSERT_EQ(SiftImageScale(scans[0].cols, half), 2);
-  ASSERT_EQ(SiftImageScale(scans[0].cols - 1, half), 1);
+  const SiftOptions half;  // the default: cells at most 0.18° apart (these 0.12°)
+  ASSERT_EQ(SiftImageScale(scans[0], half), 2);
   SiftOptions full;
-  full.half_size_from_cols = 0;
-  ASSERT_EQ(SiftImageScale(scans[0].cols, full), 1);
+  full.half_size_max_step_deg = 0;
+  ASSERT_EQ(SiftImageScale(scans[0], full), 1);
+  SiftOptions finer;
+  finer.half_size_max_step_deg = 0.1;
+  EXPECT_EQ(SiftImageScale(scans[0], finer), 1);
+  Scan merged = scans[0];  // a cloud not seen from one spot keeps its full size
+  merged.single_viewpoint = false;
+  EXPECT_EQ(SiftImageScale(merged, half), 1);
   const auto fa = DetectFeatures(scans[0], full), fb = DetectFeatures(scans[1], full);
   const auto ha = DetectFeatures(scans[0], half), hb = DetectFeatures(scans[1], half);
   ASSERT_TRUE(fa.ok() && fb.ok() && ha.ok() && hb.ok());

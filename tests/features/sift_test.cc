@@ -125,13 +125,13 @@ TEST(SiftTest, StripsFindTheWholePanoramasKeypointsOnce) {
   const Scan& scan = test::FullSizePair().at(0);
   SiftOptions whole_options;  // at full size
   whole_options.strip_pixels = 0;
-  whole_options.half_size_from_cols = 0;
+  whole_options.half_size_max_step_deg = 0;
   SiftOptions strip_options;
   strip_options.strip_pixels = scan.size() / 4;
-  strip_options.half_size_from_cols = 0;
-  ASSERT_EQ(SiftStrips(scan.rows, scan.cols, whole_options), 1);
-  ASSERT_EQ(SiftStrips(scan.rows, scan.cols, strip_options), 4);
-  EXPECT_LT(SiftStripPixels(scan.rows, scan.cols, strip_options), scan.size() / 2);
+  strip_options.half_size_max_step_deg = 0;
+  ASSERT_EQ(SiftStrips(scan, whole_options), 1);
+  ASSERT_EQ(SiftStrips(scan, strip_options), 4);
+  EXPECT_LT(SiftStripPixels(scan, strip_options), scan.size() / 2);
   const auto whole = DetectFeatures(scan, whole_options);
   const auto strips = DetectFeatures(scan, strip_options);
   ASSERT_TRUE(whole.ok() && strips.ok());

@@ -19,7 +19,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   options.global = false;
   options.keep_imported = true;
   options.geometric.coarse_scale = 3.0;
-  options.sift.half_size_from_cols = 2400;
+  options.sift.half_size_max_step_deg = 0.25;
   std::map<std::string, std::string> settings{{"simulated.seed", "3"}};
   StoreRegisterSettings(options, &settings);
   EXPECT_EQ(settings.at("register.coarse"), "none");
@@ -35,7 +35,7 @@ TEST(RegisterSettings, EveryOptionRoundTripsThroughTheProjectSettings) {
   EXPECT_FALSE(back->global);
   EXPECT_TRUE(back->keep_imported);
   EXPECT_EQ(back->geometric.coarse_scale, 3.0);
-  EXPECT_EQ(back->sift.half_size_from_cols, 2400);
+  EXPECT_EQ(back->sift.half_size_max_step_deg, 0.25);
   // Every setting's value, applied to the defaults, gives the value back.
   for (const RegisterSetting& s : RegisterSettings()) {
     RegisterOptions fresh;
@@ -60,10 +60,8 @@ TEST(RegisterSettings, BadValuesNameTheSettingNotAFlag) {
   EXPECT_FALSE(RegisterOptionsFromSettings(settings).ok());
   settings = {{"register.ratio", "0.9x"}};
   EXPECT_FALSE(RegisterOptionsFromSettings(settings).ok());
-  settings = {{"register.sift_half_size_cols", "2000.5"}};
-  r = RegisterOptionsFromSettings(settings);
-  ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("whole number of columns"), std::string::npos) << r.error().message;
+  settings = {{"register.sift_half_size_step_deg", "-0.1"}};
+  EXPECT_FALSE(RegisterOptionsFromSettings(settings).ok());
   settings = {{"register.colour", "red"}};
   r = RegisterOptionsFromSettings(settings);
   ASSERT_FALSE(r.ok());
