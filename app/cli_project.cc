@@ -176,11 +176,11 @@ int RunExportPoses(const std::vector<std::string>& argv) {
   int unregistered = 0;
   for (const io::ProjectScan& s : project->scans) {
     const io::PoseState state = io::ScanPoseState(s);
-    if (state == io::PoseState::kUnregistered) {
+    if (!s.registered) {  // unregistered or not verified: no pose to give
       left_out += (unregistered++ ? ", " : "") + s.name;
       if (!include_unregistered || format == "txt") continue;
     }
-    poses.push_back({s.name, s.world_from_scan, io::PoseStateName(state)});
+    poses.push_back({s.name, s.world_from_scan, s.registered ? io::PoseStateName(state) : io::kUnregisteredStatus});
   }
   if (unregistered > 0) {
     const bool flagged = include_unregistered && format != "txt";

@@ -71,7 +71,9 @@ void PrintText(const pipeline::ProjectRegistration& r, const std::vector<Scan>& 
   for (std::size_t i = 0; i < r.scans.size(); ++i) {
     const auto& s = r.scans[i];
     std::printf("%-8s %-13s", s.name.c_str(),
-                s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered") : "UNREGISTERED");
+                s.registered ? (static_cast<int>(i) == r.root ? "root" : "registered")
+                : s.unverified ? "NOT VERIFIED"
+                               : "UNREGISTERED");
     if (consistency) {
       auto mm = [](double v) { return v < 0 ? std::string("-") : std::to_string(1e3 * v).substr(0, 6); };
       const std::string cond = s.conditioning < 0 ? "-" : std::to_string(s.conditioning).substr(0, 6);
@@ -141,6 +143,7 @@ nlohmann::json ToJson(const pipeline::ProjectRegistration& r, const std::vector<
     const auto m = RowMajorFromIsometry(s.world_from_scan);
     json js{{"name", s.name},
             {"registered", s.registered},
+            {"status", s.registered ? "registered" : s.unverified ? "not verified" : "unregistered"},
             {"parent", s.parent >= 0 ? json(scans[s.parent].name) : json(nullptr)},
             {"reason", s.reason},
             {"world_from_scan", std::vector<double>(m.begin(), m.end())}};
@@ -217,11 +220,20 @@ int RegisterAndReport(io::Project& project, pipeline::RegisterOptions options, b
                 FormatBytes(store.budget_bytes()).c_str());
     PrintGeoref(project, *result);
   }
-  int unregistered = 0;
-  for (const auto& s : result->scans) unregistered += !s.registered;
-  if (unregistered > 0) {
-    std::fprintf(stderr, "scanreg-cli: %d of %zu scans could not be registered (reasons above); project saved\n",
-                 unregistered, result->scans.size());
+  int unregistered = 0, unverified = 0;
+  for (const auto& s : result->scans) {
+    unregistered += !s.registered && !s.unverified;
+    unverified += !s.registered && s.unverified;
+  }
+  if (unregistered + unverified > 0) {
+    std::string what;
+    if (unregistered > 0) what = std::to_string(unregistered) + " could not be registered";
+    if (unverified > 0)
+      what += (what.empty() ? "" : " and ") + std::to_string(unverified) +
+              " were placed but not verified (accept a link with `scanreg-cli link PROJECT PARENT CHILD --accept` "
+              "when its pose is right)";
+    what = "of " + std::to_string(result->scans.size()) + " scans, " + what;
+    std::fprintf(stderr, "scanreg-cli: %s (reasons above); project saved\n", what.c_str());
     return 3;
   }
   if (!project.control.empty() && !result->georeferenced) {

@@ -222,17 +222,20 @@ RegisterSettingsDialog* MainWindow::EditRegisterSettings() {
 
 void MainWindow::ReportRegistration() {
   int registered = 0, on_hand = 0;
-  QStringList left_out;
+  QStringList left_out, not_verified;
   const std::vector<bool> rests = io::RestsOnHandPlacement(project());
   for (std::size_t i = 0; i < project().scans.size(); ++i) {
     const io::ProjectScan& s = project().scans[i];
     registered += s.registered;
     on_hand += s.registered && rests[i];
     if (!s.registered)
-      left_out << QString::fromStdString(s.name) + " (" + QString::fromStdString(s.unregistered_reason) + ")";
+      (s.unverified ? not_verified : left_out)
+          << QString::fromStdString(s.name) + " (" + QString::fromStdString(s.unregistered_reason) + ")";
   }
   QString summary = tr("Registered %1 of %2 scans").arg(registered).arg(project().scans.size());
   if (on_hand > 0) summary += tr("; %n rest(s) on a hand placement", "", on_hand);
+  if (!not_verified.isEmpty())
+    summary += tr("; placed but not verified (accept the link if the pose is right): %1").arg(not_verified.join("; "));
   if (!left_out.isEmpty()) summary += tr("; not registered: %1").arg(left_out.join("; "));
   LogInfo(summary.toStdString());
   last_summary_ = summary;

@@ -125,6 +125,7 @@ void NetworkPanel::Show(const io::Project& project) {
     double rgb[3];
     ScanColour(i, rgb);
     QPen outline(scan.registered ? QColor(30, 30, 30) : QColor(200, 50, 40), scan.registered ? 1.5 : 3);
+    if (!scan.registered && scan.unverified) outline = QPen(QColor(240, 150, 30), 3);  // placed, waiting for the user
     if (on_hand[i]) outline = QPen(QColor(230, 120, 0), 3, Qt::DashLine);  // rests on a hand placement
     outline.setCosmetic(true);
     auto* node = s->addEllipse(-r, -r, 2 * r, 2 * r, outline,
@@ -134,6 +135,7 @@ void NetworkPanel::Show(const io::Project& project) {
     QString text = QString::fromStdString(scan.name);
     if (project.root == scan.name) text += tr(" (root)");
     if (on_hand[i]) text += tr(" (hand)");
+    if (!scan.registered && scan.unverified) text += tr(" (not verified)");
     if (!scan.registered && !scan.cluster.empty()) text += tr(" [cluster %1]").arg(QString::fromStdString(scan.cluster));
     if (scan.parent_override) text += " ✎";
     ++nodes_;
@@ -295,7 +297,7 @@ void NetworkPanel::contextMenuEvent(QContextMenuEvent* event) {
       if (confusion && neg == -kSkippedPair) text += tr("  (not matched)");
       else if (confusion) text += tr("  (%n match(es))", "", -neg);
       if (s.name == current) text += tr("  — current parent");
-      if (!s.registered) text += tr("  — not registered");
+      if (!s.registered) text += s.unverified ? tr("  — not verified") : tr("  — not registered");
       const QString name = QString::fromStdString(s.name);
       parent_menu->addAction(text, this, [this, child, name] { emit ParentOverrideRequested(child, name); });
     }

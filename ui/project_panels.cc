@@ -62,6 +62,7 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<pipeline:
     const io::PoseState state = io::ScanPoseState(s);
     QTableWidgetItem* status = Item(tr(io::PoseStateName(state)), Qt::AlignCenter);
     status->setForeground(state == io::PoseState::kUnregistered ? QColor(190, 60, 40)
+                          : state == io::PoseState::kNotVerified ? QColor(215, 120, 0)
                           : state == io::PoseState::kManual     ? QColor(200, 130, 0)
                           : state == io::PoseState::kImported   ? QColor(40, 90, 170)
                                                                 : QColor(20, 140, 60));
@@ -70,6 +71,11 @@ void ScanListPanel::Show(const io::Project& project, const std::vector<pipeline:
                             "it (Registration → Release hand placement lets the registration place it)"));
     } else if (state == io::PoseState::kImported) {
       status->setToolTip(tr("Pose read from a file (pose file or the scan's header): no link evidence of ours"));
+    } else if (state == io::PoseState::kNotVerified) {
+      status->setToolTip(tr("Placed by the registration, but its pose is not verified: it stays at its start pose, "
+                            "out of the merge and the export. Check the link in the scan network; accept it "
+                            "(right-click) if the pose is right, and register again.\n%1")
+                             .arg(QString::fromStdString(s.unregistered_reason)));
     } else if (state == io::PoseState::kUnregistered && !s.cluster.empty()) {
       status->setText(tr("cluster of %1").arg(QString::fromStdString(s.cluster)));
       status->setForeground(QColor(150, 80, 170));

@@ -173,7 +173,7 @@ const char* LinkStatusName(LinkStatus status) {
 }
 
 PoseState ScanPoseState(const ProjectScan& scan) {
-  if (!scan.registered) return PoseState::kUnregistered;
+  if (!scan.registered) return scan.unverified ? PoseState::kNotVerified : PoseState::kUnregistered;
   if (scan.manual_pose) return PoseState::kManual;
   if (scan.imported_pose) return PoseState::kImported;
   return PoseState::kRegistered;
@@ -183,6 +183,8 @@ const char* PoseStateName(PoseState state) {
   switch (state) {
     case PoseState::kUnregistered:
       return "unregistered";
+    case PoseState::kNotVerified:
+      return "not verified";
     case PoseState::kRegistered:
       return "registered";
     case PoseState::kImported:
@@ -279,6 +281,7 @@ Expected<Project> LoadProject(const std::filesystem::path& path) {
       scan.unregistered_reason = s.value("unregistered_reason", "");
       scan.manual_pose = s.value("manual_pose", false);
       scan.cluster = s.value("cluster", "");
+      scan.unverified = s.value("unverified", false);
       scan.imported_pose = s.value("imported_pose", false);
       for (const auto& [key, field] : {std::make_pair("start_consistency_m", &scan.start_consistency_m),
                                        std::make_pair("consistency_m", &scan.consistency_m),
@@ -389,6 +392,7 @@ Status SaveProject(const Project& project, const std::filesystem::path& path, st
     if (!s.unregistered_reason.empty()) js["unregistered_reason"] = s.unregistered_reason;
     if (s.manual_pose) js["manual_pose"] = true;
     if (!s.cluster.empty()) js["cluster"] = s.cluster;
+    if (s.unverified && !s.registered) js["unverified"] = true;
     if (s.imported_pose) js["imported_pose"] = true;
     if (s.file_up) js["file_up"] = Vec(*s.file_up);
     if (s.start_consistency_m) js["start_consistency_m"] = *s.start_consistency_m;

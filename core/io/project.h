@@ -100,6 +100,11 @@ struct ProjectScan {
   // the cluster's own frame (the cluster root's pose), so one link to a registered scan places the
   // whole cluster (pipeline::ApplyPairResult). Cleared when the scan is registered.
   std::string cluster;
+  // The last registration placed the scan but could not verify the pose (issue 33): a weak link no
+  // loop confirms, or overlaps that disagree or leave a direction free. It is not registered (it
+  // stays at its start pose, out of merge and export); unregistered_reason says why. Cleared when
+  // the scan is registered or placed by hand.
+  bool unverified = false;
   // From the last refinement from current poses (ConsistencyRecord): the median RMS of the residuals
   // of the scan's overlapping pairs at its start pose and at its result, and how well its overlaps
   // constrain its pose (1: every direction alike; near 0: one is free).
@@ -107,9 +112,9 @@ struct ProjectScan {
 };
 
 // Where a scan's pose comes from, for every front end and the report (one wording).
-enum class PoseState { kUnregistered, kRegistered, kImported, kManual };
+enum class PoseState { kUnregistered, kNotVerified, kRegistered, kImported, kManual };
 PoseState ScanPoseState(const ProjectScan& scan);
-const char* PoseStateName(PoseState state);  // "unregistered", "registered", "imported", "manual pose"
+const char* PoseStateName(PoseState state);  // "unregistered", "not verified", "registered", "imported", "manual pose"
 
 struct Project {
   static constexpr int kSchemaVersion = 1;

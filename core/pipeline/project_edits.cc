@@ -65,6 +65,7 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
       project.scans[i].registered = true;
       project.scans[i].cluster.clear();
       project.scans[i].unregistered_reason.clear();
+      project.scans[i].unverified = false;
     }
   }
   for (int i : moved) {
@@ -76,6 +77,7 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   project.scans[c].world_from_scan = new_pose;
   project.scans[c].registered = true;
   project.scans[c].unregistered_reason.clear();
+  project.scans[c].unverified = false;
   project.scans[c].manual_pose = false;
   if (old_parent != link.parent && project.root != link.child) project.scans[c].parent_override = link.parent;
 
@@ -141,6 +143,7 @@ Status SetScanPose(const std::string& scan, const Eigen::Isometry3d& world_from_
   ps.registered = true;
   ps.manual_pose = true;
   ps.unregistered_reason.clear();
+  ps.unverified = false;
   return Status::Ok();
 }
 
@@ -153,6 +156,7 @@ Status ReleaseHandPlacement(const std::string& scan, io::Project& project) {
   }
   ps.manual_pose = false;
   ps.registered = false;
+  ps.unverified = false;
   ps.unregistered_reason = "released from its hand placement; register to place it";
   return Status::Ok();
 }

@@ -384,6 +384,7 @@ void ApplyRegistration(const ProjectRegistration& result, io::Project& project) 
       ps.manual_pose = false;
     }
     ps.unregistered_reason = ps.registered ? "" : result.scans[i].reason;
+    ps.unverified = !ps.registered && result.scans[i].unverified;
     ps.cluster.clear();
     if (!ps.registered && result.scans[i].cluster >= 0) {  // placed in its cluster's frame
       const int root = result.scans[i].cluster;
@@ -493,6 +494,7 @@ Expected<ProjectRegistration> RegisterProjectScans(io::Project& project, ScanSto
       LogWarning("scan '" + ps.name + "' could not be registered (" + ps.unregistered_reason +
                  "); it keeps its imported pose");
       ps.registered = ps.imported_pose = true;
+      ps.unverified = false;  // the report says the registration could not verify the file's pose
       ps.world_from_scan = old.world_from_scan;
       ps.cluster.clear();
     }

@@ -223,6 +223,7 @@ Status VerifyAgainstStart(const std::vector<Scan>& scans, const std::vector<std:
     if (why.empty()) continue;
     LogWarning(scans[i].name + ": " + why);
     s.registered = false;
+    s.unverified = true;
     s.reason = why;
   }
   char buf[300];

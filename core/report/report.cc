@@ -197,6 +197,12 @@ std::string PosesSection(const io::Project& p) {
     std::string status = s.registered ? (p.root && *p.root == s.name ? "root" : "registered") : "not registered";
     if (!s.registered && !s.cluster.empty()) status += " (in the cluster of " + s.cluster + ")";
     if (!s.registered && !s.unregistered_reason.empty()) status += ": " + s.unregistered_reason;
+    if (!s.registered && s.unverified) {  // placed, but the pose waits for the user's accept
+      const std::string prefix = "not verified: ";
+      const std::string& why = s.unregistered_reason;
+      status = "not verified, kept at its start pose" +
+               (why.empty() ? "" : ": " + (why.rfind(prefix, 0) == 0 ? why.substr(prefix.size()) : why));
+    }
     if (s.registered && s.manual_pose) status = "placed by hand (no link evidence)";
     if (s.registered && !s.manual_pose && on_hand[i])
       status = "registered through a scan placed by hand: its pose carries that placement's error";
@@ -210,8 +216,8 @@ std::string PosesSection(const io::Project& p) {
               (s.start_consistency_m ? Fixed(1e3 * *s.start_consistency_m, 3) : std::string("-")) + " → " +
                   (s.consistency_m ? Fixed(1e3 * *s.consistency_m, 3) : std::string("-")),
               s.conditioning ? Fixed(*s.conditioning, 3) : std::string("-")},
-             !s.registered                      ? "failed"
-             : s.manual_pose || s.imported_pose || on_hand[i] ? "weak"
+             !s.registered && !s.unverified     ? "failed"
+             : !s.registered || s.manual_pose || s.imported_pose || on_hand[i] ? "weak"
                                                 : "ok");
   }
   return html + t.Html();

@@ -354,6 +354,44 @@ TEST(CliTest, HelpListsEverySubcommand) {
     EXPECT_NE(r.output.find(c), std::string::npos) << c;
 }
 
+// Two scans that only the walls seen from above place (no loop can check the pose): the scan is
+// "not verified" in the listing, the JSON and the exit status (3), told apart from a scan that could
+// not be placed; once the user accepts its link, the next registration registers it at the truth.
+TEST(CliTest, AScanPlacedButNotVerifiedSaysSoUntilItsLinkIsAccepted) {
+  test::TempDir dir;
+  ASSERT_EQ(RunCli("simulate --stations 2 --spacing 6 --size 1000x250 --out " + Quote(dir / "p")).status, 0);
+  const auto file = dir / "p" / "project.scanreg.json";
+  RunResult reg = RunCli("register " + Quote(file));
+  EXPECT_EQ(reg.status, 3) << reg.output;
+  EXPECT_NE(reg.output.find("NOT VERIFIED"), std::string::npos) << reg.output;
+  EXPECT_NE(reg.output.find("1 were placed but not verified"), std::string::npos) << reg.output;
+  EXPECT_EQ(reg.output.find("could not be registered"), std::string::npos) << reg.output;
+  Expected<io::Project> project = io::LoadProject(file);
+  ASSERT_TRUE(project.ok());
+  int waiting = -1;
+  for (std::size_t i = 0; i < project->scans.size(); ++i)
+    if (io::ScanPoseState(project->scans[i]) == io::PoseState::kNotVerified) waiting = static_cast<int>(i);
+  ASSERT_GE(waiting, 0);
+  const std::string child = project->scans[waiting].name, parent = project->scans[1 - waiting].name;
+  RunResult json = RunCli("register " + Quote(file) + " --json");
+  EXPECT_EQ(json.status, 3);
+  EXPECT_NE(json.output.find("\"status\": \"not verified\""), std::string::npos) << json.output;
+
+  ASSERT_EQ(RunCli("link " + Quote(file) + " " + parent + " " + child + " --accept").status, 0);
+  RunResult again = RunCli("register " + Quote(file));
+  ASSERT_EQ(again.status, 0) << again.output;
+  project = io::LoadProject(file);
+  ASSERT_TRUE(project.ok());
+  const io::ProjectScan& a = project->scans[0];
+  const io::ProjectScan& b = project->scans[1];
+  ASSERT_TRUE(a.registered && b.registered);
+  EXPECT_EQ(io::ScanPoseState(project->scans[waiting]), io::PoseState::kRegistered);
+  const PoseError e = ComparePoses(a.world_from_scan.inverse() * b.world_from_scan,
+                                   a.reference_world_from_scan->inverse() * *b.reference_world_from_scan);
+  EXPECT_LT(e.position_m, 0.02);
+  EXPECT_LT(e.angle_rad, 0.1 * M_PI / 180);
+}
+
 // The user's decision on a link from the command line (the GUI's right-click on the scan network):
 // saved in the project, and kept by the next registration; nonsense names a clear error.
 TEST(CliTest, LinkRecordsTheUsersDecisionAndRegisterKeepsIt) {

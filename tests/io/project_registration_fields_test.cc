@@ -44,6 +44,26 @@ TEST(ProjectRegistrationFields, RoundTrip) {
   EXPECT_TRUE(back->scans[1].coarse_world_from_scan->isApprox(*p.scans[1].coarse_world_from_scan, 1e-15));
   EXPECT_FALSE(back->scans[0].coarse_world_from_scan.has_value());
   EXPECT_EQ(back->scans[2].unregistered_reason, "link to b failed: no overlap");
+  EXPECT_EQ(ScanPoseState(back->scans[2]), PoseState::kUnregistered);
+}
+
+// A scan the registration placed but could not verify stays "not verified" after a save and a
+// load, apart from a scan it could not place at all; a registered scan is never "not verified".
+TEST(ProjectRegistrationFields, NotVerifiedIsKept) {
+  test::TempDir dir;
+  Project p = ThreeScans(dir);
+  p.scans[0].unverified = true;
+  p.scans[0].unregistered_reason = "not verified: placed only by a weak link from b";
+  p.scans[1].unverified = true;  // stale: the scan is registered
+  ASSERT_TRUE(SaveProject(p, dir / "p.scanreg.json").ok());
+  Expected<Project> back = LoadProject(dir / "p.scanreg.json");
+  ASSERT_TRUE(back.ok()) << back.error().ToString();
+  EXPECT_EQ(ScanPoseState(back->scans[0]), PoseState::kNotVerified);
+  EXPECT_STREQ(PoseStateName(ScanPoseState(back->scans[0])), "not verified");
+  EXPECT_EQ(back->scans[0].unregistered_reason, p.scans[0].unregistered_reason);
+  EXPECT_EQ(ScanPoseState(back->scans[1]), PoseState::kRegistered);
+  EXPECT_FALSE(back->scans[1].unverified);
+  EXPECT_EQ(ScanPoseState(back->scans[2]), PoseState::kUnregistered);
 }
 
 TEST(ProjectRegistrationFields, AStaleMatrixIsNeitherUsedNorSaved) {

@@ -202,6 +202,15 @@ TEST(Report, AScanPlacedByHandIsMarkedAsHavingNoLinkEvidence) {
   EXPECT_EQ(poses[0][1], "root");
   EXPECT_EQ(poses[1][1], "placed by hand (no link evidence)");
   EXPECT_NE(poses[2][1].find("not registered"), std::string::npos);
+  // A scan the registration placed but could not verify is told apart from one it could not place.
+  project->scans[2].unverified = true;
+  project->scans[2].unregistered_reason = "not verified: placed only by a weak link from s02";
+  index = WriteReport(*project, dir / "report2", progress, cancel);
+  ASSERT_TRUE(index.ok()) << index.error().ToString();
+  const auto again = Rows(Table(test::ReadBytes(*index), "poses-table"));
+  ASSERT_EQ(again.size(), 3u);
+  EXPECT_EQ(again[2][1], "not verified, kept at its start pose: placed only by a weak link from s02")
+      << again[2][1];
 }
 
 TEST(Report, FixedNumbersNeverShowANegativeZero) {

@@ -3,6 +3,7 @@
 // only what is missing.
 #include <QCheckBox>
 #include <QPushButton>
+#include <QStatusBar>
 #include <QTableWidget>
 #include <QTemporaryDir>
 #include <QUndoStack>
@@ -14,6 +15,8 @@
 #include "core/pipeline/create_project.h"
 #include "tests/ui/wait_for_job.h"
 #include "ui/main_window.h"
+#include "ui/network_panel.h"
+#include "ui/project_panels.h"
 #include "ui/pair_inspector.h"
 #include "ui/pair_panel.h"
 #include "ui/pick_points_dialog.h"
@@ -155,6 +158,12 @@ class ManualAlignmentTest : public QObject {
     QVERIFY(!window.project().scans[1].registered);
     QVERIFY2(window.project().scans[1].unregistered_reason.find("not verified") != std::string::npos,
              window.project().scans[1].unregistered_reason.c_str());
+    // Every view says so, apart from a scan that could not be placed at all.
+    QCOMPARE(window.scanList()->item(1, 3)->text(), QString("not verified"));
+    QVERIFY(window.scanList()->item(1, 3)->toolTip().contains("accept it"));
+    QVERIFY(window.networkPanel()->ScanToolTip("s02").startsWith("s02: not verified"));
+    QVERIFY2(window.statusBar()->currentMessage().contains("placed but not verified"),
+             qPrintable(window.statusBar()->currentMessage()));
     window.SetLinkDecision("s01", "s02", true, false);
     QVERIFY(window.RegisterUnregistered());
     QVERIFY(WaitForJob(window, 300000));
