@@ -124,14 +124,15 @@ CloudProjection::CloudProjection(const std::vector<Eigen::Vector3f>& points)
 }
 
 Expected<std::size_t> CloudProjection::CountKept(const OrganizeOptions& options) const {
-  return Place(options, {}, {}, {}, "cloud", nullptr);
+  return Place(options, {}, {}, {}, {}, "cloud", nullptr);
 }
 
 Expected<Scan> CloudProjection::Organize(const std::vector<float>& reflectance, const OrganizeOptions& options,
                                          std::string name, const std::vector<Rgb>& colour,
-                                         const std::vector<double>& time) const {
+                                         const std::vector<double>& time,
+                                         const std::vector<Eigen::Vector3f>& sensor) const {
   Scan scan;
-  Expected<std::size_t> kept = Place(options, reflectance, colour, time, std::move(name), &scan);
+  Expected<std::size_t> kept = Place(options, reflectance, colour, time, sensor, std::move(name), &scan);
   if (!kept) return kept.error();
   scan.grid_from_file = false;  // built here from a list of points
   return scan;
@@ -139,7 +140,8 @@ Expected<Scan> CloudProjection::Organize(const std::vector<float>& reflectance, 
 
 Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, const std::vector<float>& reflectance,
                                              const std::vector<Rgb>& colour, const std::vector<double>& time,
-                                             std::string name, Scan* out) const {
+                                             const std::vector<Eigen::Vector3f>& sensor, std::string name,
+                                             Scan* out) const {
   if (Status s = options.Validate(); !s) return s.error();
   if (out && !reflectance.empty() && reflectance.size() != points_->size()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': reflectance and point counts differ");
@@ -149,6 +151,9 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
   }
   if (out && !time.empty() && time.size() != points_->size()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': time and point counts differ");
+  }
+  if (out && !sensor.empty() && sensor.size() != points_->size()) {
+    return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': sensor position and point counts differ");
   }
   const bool rings = !options.row_elevations_rad.empty();
   double el_min = options.elevation_min_rad, el_max = options.elevation_max_rad;
@@ -178,6 +183,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
       out->angles.elevation[r] = float(rings ? options.row_elevations_rad[r] : el_max - r * el_step);
     if (!colour.empty()) out->AddColour();
     if (!time.empty()) out->AddTime();
+    if (!sensor.empty()) out->AddSensor();
   }
 
   // Ring rows: a point belongs to the ring whose elevation is nearest, i.e. between the midpoints.
@@ -241,6 +247,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
       out->Set(r, pl.col, (*points_)[i], reflectance.empty() ? 0.5f : reflectance[i]);
       if (!colour.empty()) out->colour[out->Index(r, pl.col)] = colour[i];
       if (!time.empty()) out->time[out->Index(r, pl.col)] = time[i];
+      if (!sensor.empty()) out->sensor[out->Index(r, pl.col)] = sensor[i];
       in_grid[i] = 1;
     }
   }
@@ -253,6 +260,7 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
       out->list_reflectance.push_back(reflectance.empty() ? 0.5f : reflectance[i]);
       if (!colour.empty()) out->list_colour.push_back(colour[i]);
       if (!time.empty()) out->list_time.push_back(time[i]);
+      if (!sensor.empty()) out->list_sensor.push_back(sensor[i]);
     }
   }
   return kept;
@@ -260,11 +268,11 @@ Expected<std::size_t> CloudProjection::Place(const OrganizeOptions& options, con
 
 Expected<Scan> OrganizeCloud(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                              const OrganizeOptions& options, std::string name, const std::vector<Rgb>& colour,
-                             const std::vector<double>& time) {
+                             const std::vector<double>& time, const std::vector<Eigen::Vector3f>& sensor) {
   if (points.size() > std::numeric_limits<std::uint32_t>::max()) {
     return MakeError(ErrorCode::kInvalidArgument, "organize '" + name + "': more than 2^32 points");
   }
-  return CloudProjection(points).Organize(reflectance, options, std::move(name), colour, time);
+  return CloudProjection(points).Organize(reflectance, options, std::move(name), colour, time, sensor);
 }
 
 }  // namespace scanreg

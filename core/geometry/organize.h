@@ -44,9 +44,10 @@ class CloudProjection {
   double elevation_max() const { return el_max_; }
   // How many points Organize keeps with these options, without building the grid.
   Expected<std::size_t> CountKept(const OrganizeOptions& options) const;
-  // The grid, as OrganizeCloud documents; reflectance, colour and time are empty or one per input point.
+  // The grid, as OrganizeCloud documents; reflectance, colour, time and sensor are empty or one per input point.
   Expected<Scan> Organize(const std::vector<float>& reflectance, const OrganizeOptions& options, std::string name,
-                          const std::vector<Rgb>& colour = {}, const std::vector<double>& time = {}) const;
+                          const std::vector<Rgb>& colour = {}, const std::vector<double>& time = {},
+                          const std::vector<Eigen::Vector3f>& sensor = {}) const;
 
  private:
   struct Dir {
@@ -56,10 +57,10 @@ class CloudProjection {
     std::uint32_t index;  // into the points
   };
   // Places the points in the grid of `options`; returns how many are kept. Builds the grid into
-  // *out (with reflectance, colour and time, which may be empty) unless out is null.
+  // *out (with reflectance, colour, time and sensor, which may be empty) unless out is null.
   Expected<std::size_t> Place(const OrganizeOptions& options, const std::vector<float>& reflectance,
-                              const std::vector<Rgb>& colour, const std::vector<double>& time, std::string name,
-                              Scan* out) const;
+                              const std::vector<Rgb>& colour, const std::vector<double>& time,
+                              const std::vector<Eigen::Vector3f>& sensor, std::string name, Scan* out) const;
 
   const std::vector<Eigen::Vector3f>* points_;
   std::vector<Dir> dirs_;  // sorted by azimuth, then range
@@ -72,9 +73,9 @@ class CloudProjection {
 // does every point outside a partial grid: no usable point is lost. Row 0 is the highest elevation; column 0 starts at
 // azimuth_start_rad (column azimuths increase from there and may exceed pi for a partial span).
 // Every point is an input point, unchanged. Non-finite points and points at the origin are
-// skipped. reflectance may be empty (then 0.5); colour and time may be empty (then the scan has none).
+// skipped. reflectance may be empty (then 0.5); colour, time and sensor may be empty (then the scan has none).
 Expected<Scan> OrganizeCloud(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                              const OrganizeOptions& options, std::string name, const std::vector<Rgb>& colour = {},
-                             const std::vector<double>& time = {});
+                             const std::vector<double>& time = {}, const std::vector<Eigen::Vector3f>& sensor = {});
 
 }  // namespace scanreg

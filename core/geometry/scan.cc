@@ -35,6 +35,7 @@ void Scan::Clear(int row, int col) {
   valid[i] = 0;
   if (HasColour()) colour[i] = Rgb{0, 0, 0};
   if (HasTime()) time[i] = 0.0;
+  if (HasSensor()) sensor[i].setZero();
 }
 
 void Scan::AddColour() {
@@ -45,6 +46,11 @@ void Scan::AddColour() {
 void Scan::AddTime() {
   time.assign(points.size(), 0.0);
   list_time.assign(list_points.size(), 0.0);
+}
+
+void Scan::AddSensor() {
+  sensor.assign(points.size(), Eigen::Vector3f::Zero());
+  list_sensor.assign(list_points.size(), Eigen::Vector3f::Zero());
 }
 
 std::size_t Scan::CountValid() const {
@@ -80,20 +86,24 @@ Status Scan::Validate() const {
   if (HasTime() && (time.size() != n || list_time.size() != list_points.size())) {
     return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': its times and points differ in number");
   }
+  if (HasSensor() && (sensor.size() != n || list_sensor.size() != list_points.size())) {
+    return MakeError(ErrorCode::kInvalidArgument,
+                     "scan '" + name + "': its sensor positions and points differ in number");
+  }
   if (list_reflectance.size() != list_points.size()) {
     return MakeError(ErrorCode::kInvalidArgument,
                      "scan '" + name + "': its listed points and their reflectance differ in number");
   }
   for (std::size_t i = 0; i < list_points.size(); ++i) {
     if (!list_points[i].allFinite() || !std::isfinite(list_reflectance[i]) ||
-        (!list_time.empty() && !std::isfinite(list_time[i]))) {
+        (!list_time.empty() && !std::isfinite(list_time[i])) || (!list_sensor.empty() && !list_sensor[i].allFinite())) {
       return MakeError(ErrorCode::kInvalidArgument, "scan '" + name + "': listed point " + std::to_string(i + 1) +
                                                         " (off the grid) holds a NaN or infinite value");
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (valid[i] && (!points[i].allFinite() || !std::isfinite(reflectance[i]) ||
-                     (!time.empty() && !std::isfinite(time[i])))) {
+                     (!time.empty() && !std::isfinite(time[i])) || (!sensor.empty() && !sensor[i].allFinite()))) {
       return MakeError(ErrorCode::kInvalidArgument,
                        "scan '" + name + "': cell " + std::to_string(i / cols) + "," + std::to_string(i % cols) +
                            " holds a NaN or infinite value");

@@ -30,7 +30,8 @@ using Rgb = std::array<std::uint8_t, 3>;
 // A colour from channels already on the 0..255 scale: rounded, clamped, and 0 where a channel is not finite.
 Rgb ToRgb(double red, double green, double blue);
 
-// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), 3 more with colour, 8 more with time. Points stay local to the
+// 17 bytes per cell: 12 (xyz float) + 4 (reflectance) + 1 (valid), 3 more with colour, 8 more with time,
+// 12 more with sensor positions. Points stay local to the
 // scanner (float is plenty within a few km); the pose is double, so UTM-sized coordinates keep
 // their precision.
 struct Scan {
@@ -62,6 +63,12 @@ struct Scan {
   std::vector<double> time;
   std::vector<double> list_time;
   std::string time_base;  // what the times count from, as the file said ("" when it did not)
+  // Where the sensor was when it measured each point, where the file gave it (a mobile mapper's or
+  // a merged cloud's per-point origin: PLY x_origin y_origin z_origin), scanner frame: then one per
+  // cell (empty cells 0) and one per listed point; both empty otherwise. A cloud seen from several
+  // places sees free space along these rays (registration/ray_free_space.h).
+  std::vector<Eigen::Vector3f> sensor;
+  std::vector<Eigen::Vector3f> list_sensor;
   // The grid's points were all seen from the scanner origin. False for a cloud seen from several
   // places: its grid is only an index, and no evidence is drawn from free space "seen" from it.
   bool single_viewpoint = true;
@@ -85,6 +92,9 @@ struct Scan {
   std::string TimeBaseText() const { return time_base.empty() ? "an unknown base" : "'" + time_base + "'"; }
   // Gives the scan times: every cell and listed point 0 until set.
   void AddTime();
+  bool HasSensor() const { return !sensor.empty() || !list_sensor.empty(); }
+  // Gives the scan sensor positions: every cell and listed point at the origin until set.
+  void AddSensor();
 
   std::size_t CountValid() const;  // the grid's points
   std::size_t CountPoints() const { return CountValid() + list_points.size(); }  // every point

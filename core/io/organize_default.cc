@@ -325,7 +325,7 @@ OrganizeOptions RingGridOptions(const std::vector<Eigen::Vector3f>& points) {
 
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                                       std::string name, const std::string& source, const std::vector<Rgb>& colour,
-                                      const std::vector<double>& time) {
+                                      const std::vector<double>& time, const std::vector<Eigen::Vector3f>& sensor) {
   const std::vector<Direction> dirs = Directions(points);
   const double spacing = DensityStep(dirs);
   if (dirs.empty() || spacing <= 0.0) {
@@ -383,7 +383,7 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
     return MakeError(ErrorCode::kParseError, source + ": cannot organize the cloud into a scan grid within " +
                                                  std::to_string(int(kMaxCellsPerPoint)) + " cells per point");
   }
-  Expected<Scan> scan = projection.Organize(reflectance, *best, std::move(name), colour, time);
+  Expected<Scan> scan = projection.Organize(reflectance, *best, std::move(name), colour, time, sensor);
   if (!scan) return Failed(source, scan.error());
   const bool is_rings = !best->row_elevations_rad.empty();
   Log(LogLevel::kDebug, "organizing '" + source + "': " + Thousands(best_kept) + " of " + Thousands(usable) +
@@ -402,8 +402,10 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
     if (repeated > 0) message += Thousands(repeated) + " repeat another point exactly";
     message += "); they are kept as a list and exported with the others";
     if (!scan->single_viewpoint)
-      message += "; the cloud was not seen from one place: the registration's geometry uses the list too, and no "
-                 "link is judged on free space seen from its origin";
+      message += std::string("; the cloud was not seen from one place: the registration's geometry uses the list too, ") +
+                 (scan->HasSensor() ? "and its links are judged on free space along its points' own sensor positions"
+                                    : "and no link is judged on free space seen from its origin (the file gives no "
+                                      "sensor position per point)");
     if (scan->single_viewpoint) Log(LogLevel::kInfo, message);
     else LogWarning(message);
   }

@@ -27,11 +27,12 @@ namespace scanreg::io {
 // count); when more than 1 % of the distinct points have none, the cloud was not seen from one
 // place: single_viewpoint is false and a warning says so. `source` names
 // the file (or file and scan) in messages. Error when the cloud has no usable point. However few
-// points the grid keeps (a cloud merged from many stations), no point is lost. colour and time are
+// points the grid keeps (a cloud merged from many stations), no point is lost. colour, time and sensor are
 // empty or one per point; each point keeps its own.
 Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& reflectance,
                                       std::string name, const std::string& source,
-                                      const std::vector<Rgb>& colour = {}, const std::vector<double>& time = {});
+                                      const std::vector<Rgb>& colour = {}, const std::vector<double>& time = {},
+                                      const std::vector<Eigen::Vector3f>& sensor = {});
 
 // Exposed for tests: the ring grid of step 1 at the data's own azimuth step; row_elevations_rad
 // is empty when the elevations do not form rings.

@@ -217,6 +217,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   std::vector<float> intensity;
   std::vector<Rgb> colour;
   std::vector<double> time;
+  std::vector<Eigen::Vector3f> sensor;
   std::vector<int> grid;  // vertex index per file cell, -1 = empty
   bool have_vertex = false, have_grid = false;
   long vertex_first_line = 0;
@@ -230,7 +231,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   for (const PlyElement& element : header->elements) {
     const bool is_vertex = element.name == "vertex";
     const bool is_grid = element.name == "range_grid";
-    int ix = -1, iy = -1, iz = -1, ii = -1, it = -1, ic[3] = {-1, -1, -1};
+    int ix = -1, iy = -1, iz = -1, ii = -1, it = -1, ic[3] = {-1, -1, -1}, is[3] = {-1, -1, -1};
     if (is_vertex) {
       ix = element.FindProperty("x"), iy = element.FindProperty("y"), iz = element.FindProperty("z");
       if (ix < 0 || iy < 0 || iz < 0) {
@@ -242,8 +243,17 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       // Per-point time as scanreg, CloudCompare (a LAS's "GpsTime" scalar field) and PDAL name it.
       for (const char* name : {"gps_time", "GpsTime", "scalar_GpsTime", "gpstime", "time", "timestamp", "scalar_time"})
         if (it < 0) it = element.FindProperty(name);
+      // Per-point sensor position as mobile-mapping sets (Paris-rue-Madame, iQmulus) and scanreg name
+      // it; CloudCompare's PLY export prefixes its scalar fields with "scalar_".
+      for (int a = 0; a < 3; ++a) {
+        const std::string axis(1, "xyz"[a]);
+        for (const std::string& name : {axis + "_origin", "scalar_" + axis + "_origin"})
+          if (is[a] < 0) is[a] = element.FindProperty(name.c_str());
+      }
+      if (is[0] < 0 || is[1] < 0 || is[2] < 0) is[0] = is[1] = is[2] = -1;  // all three or none
       have_vertex = true;
       points.resize(element.count);
+      if (is[0] >= 0) sensor.resize(element.count);
       if (ii >= 0) intensity.resize(element.count);
       if (it >= 0) time.resize(element.count);
       if (ic[0] >= 0) colour.resize(element.count);
@@ -261,7 +271,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     const double colour_scale = ic[0] >= 0 ? ColourScale(element.properties[ic[0]].type) : 1.0;
     double rgb[3] = {0, 0, 0};
     const std::string what = is_vertex ? "a vertex" : is_grid ? "a range_grid cell" : "element '" + element.name + "'";
-    double v[4] = {0, 0, 0, 0.5}, t = 0;
+    double v[4] = {0, 0, 0, 0.5}, t = 0, o[3] = {0, 0, 0};
     for (std::size_t k = 0; k < element.count; ++k, ++done) {
       if (done % report_every == 0) {
         if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, path.string() + ": cancelled");
@@ -309,6 +319,8 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
           v[3] = value * scale;
         else if (p == it)
           t = value;
+        else if (p == is[0] || p == is[1] || p == is[2])
+          o[p == is[0] ? 0 : p == is[1] ? 1 : 2] = value;
         else if (p == ic[0] || p == ic[1] || p == ic[2])
           rgb[p == ic[0] ? 0 : p == ic[1] ? 1 : 2] = value * colour_scale;
       }
@@ -317,6 +329,10 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       if (ii >= 0) intensity[k] = float(v[3]);
       if (ic[0] >= 0) colour[k] = ToRgb(rgb[0], rgb[1], rgb[2]);
       if (it >= 0) time[k] = t;
+      if (is[0] >= 0) {
+        const Eigen::Vector3d origin(o[0], o[1], o[2]);
+        sensor[k] = (points_in_world ? scan_from_world * origin : origin).cast<float>();
+      }
     }
   }
   if (!have_vertex) return MakeError(ErrorCode::kUnsupported, path.string() + ": the PLY file has no vertex element");
@@ -324,7 +340,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
   // NaN/inf are rejected where they would become valid cells.
   auto check_finite = [&](std::size_t k) -> Status {
     if (points[k].allFinite() && (intensity.empty() || std::isfinite(intensity[k])) &&
-        (time.empty() || std::isfinite(time[k])))
+        (time.empty() || std::isfinite(time[k])) && (sensor.empty() || sensor[k].allFinite()))
       return Status::Ok();
     const std::string where =
         header->format == PlyFormat::kAscii ? AtLine(path, vertex_first_line + long(k)) : path.string() + ": ";
@@ -347,6 +363,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
     scan = Scan(name, *rows, *cols);
     if (!colour.empty()) scan.AddColour();
     if (!time.empty()) scan.AddTime();
+    if (!sensor.empty()) scan.AddSensor();
     for (int fr = 0; fr < *rows; ++fr) {
       for (int c = 0; c < *cols; ++c) {
         const int k = grid[static_cast<std::size_t>(fr) * *cols + c];
@@ -356,6 +373,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
         scan.Set(*rows - 1 - fr, c, points[k], intensity.empty() ? 0.5f : intensity[k]);
         if (!colour.empty()) scan.colour[scan.Index(*rows - 1 - fr, c)] = colour[k];
         if (!time.empty()) scan.time[scan.Index(*rows - 1 - fr, c)] = time[k];
+        if (!sensor.empty()) scan.sensor[scan.Index(*rows - 1 - fr, c)] = sensor[k];
       }
     }
     // Vertices no cell takes (later returns of a cell, points without a cell) stay as a list.
@@ -366,16 +384,18 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       if (in_grid[k] || !points[k].allFinite() || points[k].isZero()) continue;
       if (!intensity.empty() && !std::isfinite(intensity[k])) continue;
       if (!time.empty() && !std::isfinite(time[k])) continue;
+      if (!sensor.empty() && !sensor[k].allFinite()) continue;
       scan.list_points.push_back(points[k]);
       scan.list_reflectance.push_back(intensity.empty() ? 0.5f : intensity[k]);
       if (!colour.empty()) scan.list_colour.push_back(colour[k]);
       if (!time.empty()) scan.list_time.push_back(time[k]);
+      if (!sensor.empty()) scan.list_sensor.push_back(sensor[k]);
     }
     if (header->obj_info.count("scanreg_angular_grid")) EstimateAngularGrid(scan);
   } else {
     for (std::size_t k = 0; k < points.size(); ++k)
       if (Status s = check_finite(k); !s) return s.error();
-    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string(), colour, time);
+    Expected<Scan> organized = OrganizeCloudByDensity(points, intensity, name, path.string(), colour, time, sensor);
     if (!organized) return organized.error();
     scan = std::move(*organized);
   }
@@ -420,6 +440,8 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   if (scan.HasColour()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   // CloudCompare's name: its PLY import reads the time as the "GpsTime" scalar field its LAS import makes.
   if (scan.HasTime()) header += "property double scalar_GpsTime\n";
+  // Where each point was measured from, in world coordinates like the points.
+  if (scan.HasSensor()) header += "property double x_origin\nproperty double y_origin\nproperty double z_origin\n";
   if (grid)
     header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";
@@ -444,6 +466,10 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
       chunk.append(reinterpret_cast<const char*>(&scan.reflectance[i]), sizeof(float));
       if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.colour[i].data()), 3);
       if (scan.HasTime()) chunk.append(reinterpret_cast<const char*>(&scan.time[i]), sizeof(double));
+      if (scan.HasSensor()) {
+        const Eigen::Vector3d o = scan.world_from_scan * scan.sensor[i].cast<double>();
+        chunk.append(reinterpret_cast<const char*>(o.data()), 3 * sizeof(double));
+      }
       index[static_cast<std::size_t>(fr) * scan.cols + c] = next++;
     }
     if (chunk.size() > (1 << 20)) {
@@ -457,6 +483,10 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
     chunk.append(reinterpret_cast<const char*>(&scan.list_reflectance[k]), sizeof(float));
     if (scan.HasColour()) chunk.append(reinterpret_cast<const char*>(scan.list_colour[k].data()), 3);
     if (scan.HasTime()) chunk.append(reinterpret_cast<const char*>(&scan.list_time[k]), sizeof(double));
+    if (scan.HasSensor()) {
+      const Eigen::Vector3d o = scan.world_from_scan * scan.list_sensor[k].cast<double>();
+      chunk.append(reinterpret_cast<const char*>(o.data()), 3 * sizeof(double));
+    }
     if (chunk.size() > (1 << 20)) {
       if (Status s = file.Write(chunk); !s) return s;
       chunk.clear();

@@ -16,7 +16,7 @@ namespace scanreg::io {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'R', 'G', 'S', 'C', 'A', 'N', '\0'};
-constexpr std::uint32_t kVersion = 6;  // 3: grid_from_file; 4: list points, single_viewpoint; 5: colour; 6: time
+constexpr std::uint32_t kVersion = 7;  // 3: grid_from_file; 4: list points, single_viewpoint; 5: colour; 6: time; 7: sensor
 constexpr std::size_t kFixedHeader = 8 + 4 + 4 + 8;
 constexpr std::uint32_t kMaxScans = 1u << 20;
 // The header: the fixed part, n + 1 offsets, its checksum.
@@ -170,6 +170,11 @@ void PutRecord(std::string& out, const Scan& s) {
     PutBytes(out, s.time.data(), s.time.size() * sizeof(double));
     PutBytes(out, s.list_time.data(), s.list_time.size() * sizeof(double));
   }
+  Put(out, static_cast<std::uint8_t>(s.HasSensor()));
+  if (s.HasSensor()) {
+    PutBytes(out, s.sensor.data(), s.sensor.size() * sizeof(Eigen::Vector3f));
+    PutBytes(out, s.list_sensor.data(), s.list_sensor.size() * sizeof(Eigen::Vector3f));
+  }
   Put(out, Checksum(out.data() + begin, out.size() - begin));
 }
 
@@ -177,7 +182,8 @@ std::size_t RecordBytes(const Scan& s) {
   return 4 + s.name.size() + 4 + 4 + 128 + 1 + (s.reference_world_from_scan ? 128 : 0) + 1 + 4 +
          4 * s.angles.azimuth.size() + 4 + 4 * s.angles.elevation.size() + 17 * s.size() + 1 + 8 + 16 * s.list_points.size() + 1 +
          (s.HasColour() ? 3 * (s.size() + s.list_points.size()) : 0) + 1 +
-         (s.HasTime() ? 4 + s.time_base.size() + 8 * (s.size() + s.list_points.size()) : 0) + 8;
+         (s.HasTime() ? 4 + s.time_base.size() + 8 * (s.size() + s.list_points.size()) : 0) + 1 +
+         (s.HasSensor() ? 12 * (s.size() + s.list_points.size()) : 0) + 8;
 }
 
 // The record in bytes [begin, end).
@@ -239,6 +245,12 @@ Expected<Scan> ParseRecord(const std::string& bytes, std::size_t begin, std::siz
     s.AddTime();
     r.Bytes(s.time.data(), cells * sizeof(double));
     r.Bytes(s.list_time.data(), listed * sizeof(double));
+  }
+  if (r.Get<std::uint8_t>() != 0) {
+    if (!r.ok || (cells + listed) * sizeof(Eigen::Vector3f) > end - r.pos) return Bad("truncated or corrupt sensor positions");
+    s.AddSensor();
+    r.Bytes(s.sensor.data(), cells * sizeof(Eigen::Vector3f));
+    r.Bytes(s.list_sensor.data(), listed * sizeof(Eigen::Vector3f));
   }
   if (!r.ok) return Bad("truncated");
   if (r.pos != end - 8) return Bad("trailing bytes in a scan's record");

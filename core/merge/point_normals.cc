@@ -10,10 +10,11 @@
 
 namespace scanreg::merge {
 
-PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* eye, const Eigen::Vector3f& fallback_eye, int k,
-                                  const CancelToken& cancel) {
+PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& eyes,
+                                  const Eigen::Vector3f& fallback_eye, int k, const CancelToken& cancel) {
   PointNormals out;
   const std::size_t n = points.size();
+  const bool per_point = eyes.size() == n && n > 1, seen = per_point || eyes.size() == 1;
   out.normal.assign(n, Eigen::Vector3f::Zero());
   if (n < 3) return out;
   k = std::clamp(k, 3, int(std::min<std::size_t>(n, 64)));
@@ -59,10 +60,10 @@ PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, co
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(cov);
     if (eig.info() != Eigen::Success || !(eig.eigenvalues()(1) > 0.0f)) continue;  // a line or a point: no plane
     Eigen::Vector3f normal = eig.eigenvectors().col(0);
-    if (eye && normal.dot(*eye - points[i]) < 0.0f) normal = -normal;
+    if (seen && normal.dot(eyes[per_point ? std::size_t(i) : 0] - points[i]) < 0.0f) normal = -normal;
     out.normal[i] = normal;
   }
-  if (eye || cancel.IsCancelled()) return out;
+  if (seen || cancel.IsCancelled()) return out;
   // Orientation: best-first growth over the neighbour graph.
   std::vector<char> done(n, 0);
   using Edge = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>;  // (1 - |cos|, (from, to))

@@ -17,13 +17,15 @@ struct PointNormals {
 };
 
 // The plane of each point's k nearest neighbours among `points` (least squares, PCA). Orientation:
-// where `eye` is given, towards it (the scanner that saw the points); otherwise grown over the
+// towards the sensor that saw the point where `eyes` holds one position per point (a cloud with
+// per-point sensor positions), towards eyes[0] where it holds one (the scanner); otherwise (empty)
+// grown over the
 // k-nearest-neighbour graph, the most parallel neighbour first (Hoppe et al. 1992's minimum
 // spanning tree), from the point nearest `fallback_eye` facing it — for a cloud seen from several
 // places, its origin: the side the surfaces are seen from carries over to the points beside them.
 // A point whose k-th neighbour lies beyond 8 x the median of that distance is isolated: zero normal.
 // Empty result when cancelled.
-PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f* eye, const Eigen::Vector3f& fallback_eye, int k,
-                                  const CancelToken& cancel);
+PointNormals EstimatePointNormals(const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& eyes,
+                                  const Eigen::Vector3f& fallback_eye, int k, const CancelToken& cancel);
 
 }  // namespace scanreg::merge

@@ -102,27 +102,31 @@ bool Locate(const std::vector<float>& a, float v, int* i0, float* t) {
 // holes where the cloud is sparse), peak 5.7 GB against 6.9 GB; quarter-voxel cubes: 475 s.
 struct DiscSource {
   std::vector<Eigen::Vector3f> points;
-  std::vector<Rgb> colours;  // per point when the scan has colour
+  std::vector<Rgb> colours;              // per point when the scan has colour
+  std::vector<Eigen::Vector3f> sensors;  // per point when the scan has sensor positions (at t)
 };
 DiscSource DiscPoints(const Scan& s, const Eigen::Isometry3f& t, double voxel_m) {
   DiscSource out;
   std::vector<Eigen::Vector3f>& points = out.points;
-  const bool every_point = !s.single_viewpoint, coloured = s.HasColour();
+  const bool every_point = !s.single_viewpoint, coloured = s.HasColour(), sensed = s.HasSensor();
   points.reserve(s.list_points.size() + (every_point ? s.CountValid() : 0));
   if (every_point) {
     for (std::size_t i = 0; i < s.size(); ++i) {
       if (!s.valid[i]) continue;
       points.push_back(t * s.points[i]);
       if (coloured) out.colours.push_back(s.colour[i]);
+      if (sensed) out.sensors.push_back(t * s.sensor[i]);
     }
   }
   for (const Eigen::Vector3f& p : s.list_points) points.push_back(t * p);
   if (coloured) out.colours.insert(out.colours.end(), s.list_colour.begin(), s.list_colour.end());
+  if (sensed)
+    for (const Eigen::Vector3f& e : s.list_sensor) out.sensors.push_back(t * e);
   if (!(voxel_m > 0.0)) return out;
   const double cell = 0.5 * voxel_m;
   std::unordered_map<BlockKey, std::uint32_t, BlockKeyHash> index;  // cube -> its centroid's slot
   std::vector<Eigen::Vector3d> sum;
-  std::vector<Eigen::Vector3d> colour_sum;
+  std::vector<Eigen::Vector3d> colour_sum, sensor_sum;
   std::vector<std::uint32_t> count;
   index.reserve(points.size() / 4);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -132,16 +136,20 @@ DiscSource DiscPoints(const Scan& s, const Eigen::Isometry3f& t, double voxel_m)
     if (added) {
       sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
       if (coloured) colour_sum.emplace_back(Eigen::Vector3d::Zero());
+      if (sensed) sensor_sum.emplace_back(Eigen::Vector3d::Zero());
     }
     sum[it->second] += p.cast<double>();
+    if (sensed) sensor_sum[it->second] += out.sensors[i].cast<double>();
     if (coloured) colour_sum[it->second] += Eigen::Vector3d(out.colours[i][0], out.colours[i][1], out.colours[i][2]);
     ++count[it->second];
   }
   if (sum.size() == points.size()) return out;  // no cube holds two: as they are
   points.clear();
   out.colours.clear();
+  out.sensors.clear();
   for (std::size_t k = 0; k < sum.size(); ++k) {
     points.push_back((sum[k] / double(count[k])).cast<float>());
+    if (sensed) out.sensors.push_back((sensor_sum[k] / double(count[k])).cast<float>());
     if (coloured) {
       const Eigen::Vector3d c = colour_sum[k] / double(count[k]);
       out.colours.push_back(ToRgb(c.x(), c.y(), c.z()));
@@ -159,7 +167,10 @@ std::shared_ptr<const ScanLayout::Discs> MakeDiscs(const Scan& s, const Eigen::I
   const DiscSource source = DiscPoints(s, t, voxel_m);
   const std::vector<Eigen::Vector3f>& points = source.points;
   const Eigen::Vector3f eye = t.translation();
-  const PointNormals normals = EstimatePointNormals(points, s.single_viewpoint ? &eye : nullptr, eye, 12, cancel);
+  // Each point faces the sensor that saw it: the scanner of a scan seen from one place, its own
+  // sensor position where the file gave one, else the orientation grows from the origin.
+  const std::vector<Eigen::Vector3f> eyes = s.single_viewpoint ? std::vector<Eigen::Vector3f>{eye} : source.sensors;
+  const PointNormals normals = EstimatePointNormals(points, eyes, eye, 12, cancel);
   if (cancel.IsCancelled() || !(normals.spacing > 0.0f)) return nullptr;
   auto discs = std::make_shared<ScanLayout::Discs>();
   discs->radius = normals.spacing;

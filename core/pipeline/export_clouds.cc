@@ -33,6 +33,9 @@ void ApplyPose(Scan& scan) {
   for (std::size_t i = 0; i < scan.size(); ++i)
     if (scan.valid[i]) scan.points[i] = t * scan.points[i];
   for (Eigen::Vector3f& p : scan.list_points) p = t * p;
+  for (std::size_t i = 0; i < scan.sensor.size(); ++i)
+    if (scan.valid[i]) scan.sensor[i] = t * scan.sensor[i];
+  for (Eigen::Vector3f& s : scan.list_sensor) s = t * s;
   scan.world_from_scan = Eigen::Isometry3d::Identity();
   scan.angles = AngularGrid{};
 }
@@ -142,6 +145,10 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
       }
     }
     out.points = scan.CountPoints();
+    if (scan.HasSensor() && options.format != "ply")
+      LogWarning(out.file.string() + ": scan '" + scan.name + "' has a sensor position per point, which " +
+                 options.format + " has no field for: they are left out; export ply to keep them (x_origin y_origin "
+                 "z_origin)");
     SubProgress write_progress(progress, (i + 0.5) / n, (i + 1) / n);
     written.Track(out.file);
     const Status s = options.format == "las" ? WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1))

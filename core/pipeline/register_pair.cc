@@ -149,6 +149,9 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   prepared->surface_options = options.dense_icp;
   prepared->plan = MakePlanView(prepared->geometric, scan);
   prepared->panoramic = scan.grid_from_file && FullCircle(scan.angles);
+  prepared->rays.reset();
+  if (scan.HasSensor() && !HasViewpoint(scan))
+    prepared->rays = std::make_shared<const RayFreeSpace>(scan, options.overlap_distance_m);
   std::vector<float> ranges;
   ranges.reserve(prepared->samples.size());
   for (const Eigen::Vector3f& p : prepared->samples) ranges.push_back(p.norm());
@@ -211,7 +214,7 @@ AlignmentEvidence EvaluateAlignment(const PreparedScan& parent, const PreparedSc
     e.unavailable = (a ? b : a).error().message;
     return e;
   }
-  const PairFreeSpace f = PairFreeSpaceCheck(**a, **b, parent_from_child, free_space);
+  const PairFreeSpace f = PairFreeSpaceCheck(**a, **b, parent_from_child, free_space, parent.rays.get(), child.rays.get());
   e.conflict = f.conflict();
   e.moving = f.moving();
   e.violations = f.a_sees_b.violations + f.b_sees_a.violations;

@@ -18,6 +18,7 @@
 #include "core/registration/geometric_features.h"
 #include "core/registration/icp.h"
 #include "core/registration/plan_view.h"
+#include "core/registration/ray_free_space.h"
 
 namespace scanreg::pipeline {
 
@@ -39,6 +40,9 @@ struct PreparedScan {
   PlanView plan;                // walls seen from above (levelled scans with geometric features)
   bool panoramic = false;       // a full-circle grid from its file: a tripod station that sees all round
   double median_range_m = 0.0;  // of the samples, from the scanner
+  // Free space seen along the scan's per-point rays (a cloud with sensor positions and no one
+  // viewpoint: ray_free_space.h), in cubes of the overlap distance; null otherwise.
+  std::shared_ptr<const RayFreeSpace> rays;
   // Valid points voxel-downsampled at the dense ICP voxel, scanner frame, in single precision (kept
   // for the whole run: 12 bytes a sample; ToDouble for use).
   std::vector<Eigen::Vector3f> samples;

@@ -16,7 +16,8 @@ std::size_t ScanBytes(const Scan& scan) {
          scan.valid.capacity() + (scan.angles.azimuth.capacity() + scan.angles.elevation.capacity()) * sizeof(float) +
          scan.list_points.capacity() * sizeof(Eigen::Vector3f) + scan.list_reflectance.capacity() * sizeof(float) +
          (scan.colour.capacity() + scan.list_colour.capacity()) * sizeof(Rgb) +
-         (scan.time.capacity() + scan.list_time.capacity()) * sizeof(double);
+         (scan.time.capacity() + scan.list_time.capacity()) * sizeof(double) +
+         (scan.sensor.capacity() + scan.list_sensor.capacity()) * sizeof(Eigen::Vector3f);
 }
 
 std::size_t DefaultMemoryBudget() {

@@ -254,16 +254,22 @@ std::vector<int> Cluster(const std::vector<Eigen::Vector3d>& points, double cell
 }  // namespace
 
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                                    const FreeSpaceOptions& options) {
+                                    const FreeSpaceOptions& options, const RayFreeSpace* observer_rays) {
   FreeSpaceResult result;
   const GridProjector projector(observer);
-  if (!projector.known()) return result;
+  const bool rays = !projector.known() && observer_rays && observer_rays->known();
+  if (!projector.known() && !rays) return result;
   const std::vector<std::size_t> samples = SampleIndices(other, options);
   std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
   std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < static_cast<long>(samples.size()); ++k) {
     const Eigen::Vector3d q = mapped[k] = observer_from_other * other.points[samples[k]].cast<double>();
+    if (rays) {
+      const RayFreeSpace::Seen seen = observer_rays->At(q);
+      state[k] = seen == RayFreeSpace::Seen::kFree ? 2 : seen == RayFreeSpace::Seen::kSurface ? 1 : 0;
+      continue;
+    }
     double nearest = 0.0;
     if (!NearestAround(observer, projector, q, &nearest)) continue;
     state[k] = nearest > q.norm() + options.margin_m ? 2 : 1;
@@ -291,10 +297,11 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
 bool HasViewpoint(const Scan& observer) { return GridProjector(observer).known(); }
 
 PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isometry3d& a_from_b,
-                                 const FreeSpaceOptions& options) {
+                                 const FreeSpaceOptions& options, const RayFreeSpace* a_rays,
+                                 const RayFreeSpace* b_rays) {
   PairFreeSpace r;
-  r.a_sees_b = FreeSpaceViolations(a, b, a_from_b, options);
-  r.b_sees_a = FreeSpaceViolations(b, a, a_from_b.inverse(), options);
+  r.a_sees_b = FreeSpaceViolations(a, b, a_from_b, options, a_rays);
+  r.b_sees_a = FreeSpaceViolations(b, a, a_from_b.inverse(), options, b_rays);
   return r;
 }
 

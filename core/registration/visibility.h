@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/geometry/scan.h"
+#include "core/registration/ray_free_space.h"
 
 namespace scanreg {
 
@@ -53,12 +54,14 @@ struct FreeSpaceResult {
 
 // Samples `other`'s valid points (a regular sub-grid of an organized scan, evenly spaced indices
 // otherwise), maps them into the observer's frame and its grid: panoramic (observer.angles) or
-// perspective (a depth camera's pixel grid, fitted to the observer's own points); returns
-// tested = 0 for a grid that is neither (no viewpoint to see free space from: HasViewpoint). A
-// sample is a violation when even the nearest return in the 3x3 cells around its projection is
-// farther than the sample's range + margin (the 3x3 minimum spares depth edges and mixed pixels).
+// perspective (a depth camera's pixel grid, fitted to the observer's own points). A sample is a
+// violation when even the nearest return in the 3x3 cells around its projection is farther than
+// the sample's range + margin (the 3x3 minimum spares depth edges and mixed pixels). A grid that is
+// neither (no viewpoint: HasViewpoint) sees free space only along the observer's per-point rays
+// (`observer_rays`, built from Scan::sensor with cells of half the margin): a sample in a free cube
+// is a violation, one beside a return is tested; tested = 0 without them.
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                                    const FreeSpaceOptions& options);
+                                    const FreeSpaceOptions& options, const RayFreeSpace* observer_rays = nullptr);
 
 // True when free space can be seen from the observer's grid (panoramic or perspective).
 bool HasViewpoint(const Scan& observer);
@@ -71,7 +74,8 @@ struct PairFreeSpace {
   double total() const { return std::max(a_sees_b.fraction(), b_sees_a.fraction()); }
 };
 PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isometry3d& a_from_b,
-                                 const FreeSpaceOptions& options);
+                                 const FreeSpaceOptions& options, const RayFreeSpace* a_rays = nullptr,
+                                 const RayFreeSpace* b_rays = nullptr);
 
 // Marks (sets to 1) every valid point of `other` that lies in the observer's free space, without
 // sampling or clustering: after registration these are moving objects (or stray returns). `mask`

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <optional>
 #include <random>
 #include <unordered_map>
@@ -282,6 +283,18 @@ std::vector<Eigen::Vector3d> ReadLasBySpecification(const std::filesystem::path&
   return out;
 }
 
+// Two simulated street stations 6 m apart, 600 × 150, with their true poses.
+Expected<std::vector<Scan>> TwoStreetStations() {
+  SimulatedProjectOptions o;
+  o.stations = 2;
+  o.spacing_m = 6;
+  o.scanner.cols = 600;
+  o.scanner.rows = 150;
+  o.seed = o.scanner.seed = o.scene.seed = 9;
+  NullProgress progress;
+  return SimulateProject(o, progress, CancelToken());
+}
+
 // A cloud merged from two stations by another program (an ASCII PLY of x y z intensity in world
 // coordinates, the points shuffled) is imported with every point — not one range image seen from
 // its origin: the points that crowd each other's cells are kept as a list, and the scan is marked as
@@ -290,15 +303,9 @@ std::vector<Eigen::Vector3d> ReadLasBySpecification(const std::filesystem::path&
 // grid only, is refused with the formats that work.
 TEST(ThirdPartyReaders, AMergedCloudIsImportedAndExportedWithEveryPoint) {
   test::TempDir dir;
-  SimulatedProjectOptions o;
-  o.stations = 2;
-  o.spacing_m = 6;
-  o.scanner.cols = 600;
-  o.scanner.rows = 150;
-  o.seed = o.scanner.seed = o.scene.seed = 9;
   NullProgress progress;
   CancelToken cancel;
-  Expected<std::vector<Scan>> stations = SimulateProject(o, progress, cancel);
+  Expected<std::vector<Scan>> stations = TwoStreetStations();
   ASSERT_TRUE(stations.ok()) << stations.error().ToString();
   std::vector<Eigen::Vector3d> merged;
   for (const Scan& s : *stations)
@@ -359,6 +366,91 @@ TEST(ThirdPartyReaders, AMergedCloudIsImportedAndExportedWithEveryPoint) {
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.error().message.find("e57, ply or las"), std::string::npos) << refused.error().message;
   EXPECT_NE(refused.error().message.find("merged"), std::string::npos) << refused.error().message;
+}
+
+// A mobile mapper's cloud with each point's sensor position (PLY x_origin y_origin z_origin, as
+// the Paris-rue-Madame and iQmulus sets write it; issue 34): every point keeps its own on import,
+// and the exported PLY gives it back to PCL's reader, in world coordinates beside the point.
+TEST(ThirdPartyReaders, EveryPointKeepsItsSensorPositionFromImportToExport) {
+  test::TempDir dir;
+  NullProgress progress;
+  CancelToken cancel;
+  Expected<std::vector<Scan>> stations = TwoStreetStations();
+  ASSERT_TRUE(stations.ok()) << stations.error().ToString();
+  // Point -> its station, keyed by the point as written (5 decimals).
+  std::map<std::array<long long, 3>, Eigen::Vector3d> origin_of;
+  auto key = [](const Eigen::Vector3d& p) {
+    return std::array<long long, 3>{std::llround(p.x() * 1e4), std::llround(p.y() * 1e4), std::llround(p.z() * 1e4)};
+  };
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> merged;  // (point, sensor)
+  for (const Scan& s : *stations)
+    for (std::size_t k = 0; k < s.size(); ++k)
+      if (s.valid[k])
+        merged.push_back({*s.reference_world_from_scan * s.points[k].cast<double>(),
+                          s.reference_world_from_scan->translation() + Eigen::Vector3d(0.01 * (k % 7), 0.0, 0.0)});
+  std::shuffle(merged.begin(), merged.end(), std::mt19937(4));
+  const std::filesystem::path file = dir / "mobile.ply";
+  {
+    std::FILE* f = std::fopen(file.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fprintf(f, "ply\nformat ascii 1.0\nelement vertex %zu\nproperty float x\nproperty float y\n"
+                 "property float z\nproperty float x_origin\nproperty float y_origin\nproperty float z_origin\n"
+                 "property float reflectance\nend_header\n", merged.size());
+    for (auto& [p, s] : merged) {
+      std::fprintf(f, "%.4f %.4f %.4f %.4f %.4f %.4f 0.5\n", p.x(), p.y(), p.z(), s.x(), s.y(), s.z());
+      p = Eigen::Vector3d(std::round(p.x() * 1e4), std::round(p.y() * 1e4), std::round(p.z() * 1e4)) * 1e-4;
+      s = Eigen::Vector3d(std::round(s.x() * 1e4), std::round(s.y() * 1e4), std::round(s.z() * 1e4)) * 1e-4;
+      origin_of[key(p)] = s;
+    }
+    std::fclose(f);
+  }
+  std::optional<Imported> in = ImportFile(file, dir.path());
+  ASSERT_TRUE(in);
+  const Scan& scan = in->scans.front();
+  ASSERT_TRUE(scan.HasSensor());
+  EXPECT_FALSE(scan.single_viewpoint);
+  ASSERT_EQ(scan.CountPoints(), merged.size());
+  // The float of the file is kept as a float: a few tenths of a millimetre at 6 m.
+  auto wrong = [&](const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>& read) {
+    std::size_t bad = 0;
+    for (const auto& [p, s] : read) {
+      auto it = origin_of.find(key(p));
+      bad += it == origin_of.end() || (it->second - s).norm() > 1e-3;
+    }
+    return bad;
+  };
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> imported;
+  for (std::size_t i = 0; i < scan.size(); ++i)
+    if (scan.valid[i])
+      imported.push_back({scan.world_from_scan * scan.points[i].cast<double>(), scan.world_from_scan * scan.sensor[i].cast<double>()});
+  for (std::size_t k = 0; k < scan.list_points.size(); ++k)
+    imported.push_back({scan.world_from_scan * scan.list_points[k].cast<double>(),
+                        scan.world_from_scan * scan.list_sensor[k].cast<double>()});
+  ASSERT_EQ(imported.size(), merged.size());
+  EXPECT_EQ(wrong(imported), 0u);
+
+  in->project.scans[0].registered = true;
+  pipeline::ExportCloudsOptions options;
+  options.dir = dir / "ply";
+  options.format = "ply";
+  auto exported = pipeline::ExportClouds(in->project, options, progress, cancel);
+  ASSERT_TRUE(exported.ok()) << exported.error().ToString();
+  pcl::PCLPointCloud2 cloud;
+  ASSERT_EQ(pcl::io::loadPLYFile((*exported)[0].file.string(), cloud), 0);
+  int offset[6] = {-1, -1, -1, -1, -1, -1};
+  const char* names[6] = {"x", "y", "z", "x_origin", "y_origin", "z_origin"};
+  for (const auto& f : cloud.fields)
+    for (int d = 0; d < 6; ++d)
+      if (f.name == names[d] && f.datatype == pcl::PCLPointField::FLOAT64) offset[d] = static_cast<int>(f.offset);
+  for (int d = 0; d < 6; ++d) ASSERT_GE(offset[d], 0) << "PCL found no double " << names[d];
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> read;
+  for (std::size_t i = 0; i < std::size_t(cloud.width) * cloud.height; ++i) {
+    double v[6];
+    for (int d = 0; d < 6; ++d) std::memcpy(&v[d], cloud.data.data() + i * cloud.point_step + offset[d], 8);
+    read.push_back({Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5])});
+  }
+  ASSERT_EQ(read.size(), merged.size());
+  EXPECT_EQ(wrong(read), 0u);
 }
 
 // The libE57 reference file bunnyDouble.e57 (written by another program: one unstructured list of

@@ -39,6 +39,8 @@ void ExpectSameScans(const std::vector<Scan>& a, const std::vector<Scan>& b) {
     EXPECT_EQ(a[k].list_reflectance, b[k].list_reflectance);
     EXPECT_EQ(a[k].single_viewpoint, b[k].single_viewpoint);
     EXPECT_EQ(a[k].grid_from_file, b[k].grid_from_file);
+    EXPECT_EQ(a[k].sensor, b[k].sensor);
+    EXPECT_EQ(a[k].list_sensor, b[k].list_sensor);
   }
 }
 
@@ -83,6 +85,9 @@ TEST(ScanCache, KeepsTheListedPointsAndTheViewpoint) {
   }
   with_list.single_viewpoint = false;
   with_list.grid_from_file = false;
+  with_list.AddSensor();  // each point's sensor position (a mobile mapper's)
+  for (std::size_t i = 0; i < with_list.size(); ++i) with_list.sensor[i] = Eigen::Vector3f(0.1f * float(i % 13), 2, 1);
+  for (std::size_t k = 0; k < with_list.list_sensor.size(); ++k) with_list.list_sensor[k] = Eigen::Vector3f(-3, 0.5f * float(k), 1);
   const std::string bytes = SerializeScanCache({with_list, Grid("plain", 1)}, 77);
   Expected<std::vector<Scan>> back = ParseScanCache(bytes, 77);
   ASSERT_TRUE(back.ok()) << back.error().message;
