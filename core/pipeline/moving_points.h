@@ -21,7 +21,8 @@ struct MovingPointOptions {
 
 // Per scan (its world_from_scan the registered pose), its cells whose point lies in the free space
 // of one of its nearest other scans, ascending. Scans without a panoramic grid (no angles) can be
-// tested but do not observe. Scan by scan, for scans read when needed (issue 13: a project larger
+// tested but do not observe, unless they give each point's sensor position (free space along
+// those rays, ray_free_space.h). Scan by scan, for scans read when needed (issue 13: a project larger
 // than memory): scan i and its observers are asked of `scans` in turn (poses[i]: scan i's pose, to
 // choose the observers before reading them). Errors: a scan that cannot be read; cancelled
 // (kCancelled).

@@ -306,15 +306,20 @@ PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isom
 }
 
 void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                         double margin_m, std::vector<std::uint8_t>* mask) {
+                         double margin_m, std::vector<std::uint8_t>* mask, const RayFreeSpace* observer_rays) {
   mask->resize(other.size(), 0);
   const GridProjector projector(observer);
-  if (!projector.known()) return;
+  const bool rays = !projector.known() && observer_rays && observer_rays->known();
+  if (!projector.known() && !rays) return;
   std::vector<std::uint8_t>& m = *mask;
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < static_cast<long>(other.size()); ++i) {
     if (!other.valid[i] || m[i]) continue;
     const Eigen::Vector3d q = observer_from_other * other.points[i].cast<double>();
+    if (rays) {
+      if (observer_rays->At(q) == RayFreeSpace::Seen::kFree) m[i] = 1;
+      continue;
+    }
     double nearest = 0.0;
     if (NearestAround(observer, projector, q, &nearest) && nearest > q.norm() + margin_m) m[i] = 1;
   }

@@ -79,8 +79,9 @@ PairFreeSpace PairFreeSpaceCheck(const Scan& a, const Scan& b, const Eigen::Isom
 
 // Marks (sets to 1) every valid point of `other` that lies in the observer's free space, without
 // sampling or clustering: after registration these are moving objects (or stray returns). `mask`
-// has other.size() entries; points already marked stay marked.
+// has other.size() entries; points already marked stay marked. An observer without a grid
+// viewpoint sees free space along `observer_rays` when given (cubes of half the margin), else none.
 void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
-                         double margin_m, std::vector<std::uint8_t>* mask);
+                         double margin_m, std::vector<std::uint8_t>* mask, const RayFreeSpace* observer_rays = nullptr);
 
 }  // namespace scanreg

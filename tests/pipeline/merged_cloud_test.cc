@@ -11,6 +11,7 @@
 
 #include "core/geometry/transform.h"
 #include "core/io/organize_default.h"
+#include "core/pipeline/moving_points.h"
 #include "core/pipeline/register_project.h"
 #include "core/pipeline/scale_defaults.h"
 #include "core/registration/ray_free_space.h"
@@ -24,9 +25,10 @@ constexpr double kDeg = 180.0 / M_PI;
 
 // Six stations of a street 8 m apart: 1, 3, 5 stay tripod scans; 0, 2, 4 are merged into one cloud
 // at their true poses (world coordinates, the points shuffled), with each point's station as its
-// sensor position when `with_sensor`.
-std::vector<Scan> TripodsAndMergedCloud(bool with_sensor) {
+// sensor position when `with_sensor`; `movers` vehicles and as many pedestrians placed anew in every scan.
+std::vector<Scan> TripodsAndMergedCloud(bool with_sensor, int movers = 0) {
   SimulatedProjectOptions o;
+  o.traffic.vehicles = o.traffic.pedestrians = movers;
   o.stations = 6;
   o.spacing_m = 8;
   o.scanner.cols = 1000;
@@ -173,6 +175,43 @@ TEST(MergedCloud, SeesFreeSpaceAlongItsRaysWhereTheFileGivesThem) {
   const AlignmentEvidence unseen = EvaluateAlignment(cloud_without, tripod, turned, d);
   EXPECT_GT(seen.tested, unseen.tested);
   EXPECT_GT(seen.conflict, 0.05);
+}
+
+// The merge leaves out moving objects: a tripod's points in another scanner's free space. Where
+// the cloud gives its sensor positions, its rays find them as a tripod's range image does, and
+// mark no more static points on a street without traffic than a range image.
+TEST(MergedCloud, ItsRaysFindTheTrafficInTheTripodScans) {
+  // Each tripod's points marked by one observer: the cloud (3), or the next tripod (its range image).
+  auto marked = [](std::vector<Scan> scans, int observer, std::size_t* points) {
+    for (Scan& s : scans) s.world_from_scan = *s.reference_world_from_scan;  // registered at the truth
+    std::size_t n = 0;
+    *points = 0;
+    for (int t = 0; t < 3; ++t) {
+      const int o = observer == 3 ? 3 : (t + 1) % 3;
+      auto cells = MovingPointCells(merge::ScansInMemory({&scans[t], &scans[o]}),
+                                    {scans[t].world_from_scan, scans[o].world_from_scan}, MovingPointOptions(),
+                                    CancelToken());
+      EXPECT_TRUE(cells.ok()) << cells.error().ToString();
+      if (!cells.ok()) return n;
+      n += (*cells)[0].size();
+      *points += scans[t].CountValid();
+    }
+    return n;
+  };
+  std::size_t points = 0;
+  const std::vector<Scan> busy = TripodsAndMergedCloud(true, 6), quiet = TripodsAndMergedCloud(true, 0);
+  const std::size_t busy_rays = marked(busy, 3, &points), quiet_rays = marked(quiet, 3, &points);
+  const std::size_t busy_grid = marked(busy, 0, &points), quiet_grid = marked(quiet, 0, &points);
+  const std::size_t busy_none = marked(TripodsAndMergedCloud(false, 6), 3, &points);
+  std::printf("tripod points marked as moving (of %zu): by the cloud's rays %zu busy, %zu quiet; by the next tripod's "
+              "range image %zu busy, %zu quiet; by the cloud without sensor positions %zu\n",
+              points, busy_rays, quiet_rays, busy_grid, quiet_grid, busy_none);
+  EXPECT_EQ(busy_none, 0u);
+  // A range image marks some static points too (grazing surfaces, mixed pixels): the rays no more
+  // than it, and the traffic above that as a range image finds it.
+  EXPECT_LT(double(quiet_rays), 1.5 * double(quiet_grid));
+  EXPECT_GT(busy_rays, 2 * quiet_rays);
+  EXPECT_GT(double(busy_rays) - double(quiet_rays), 0.5 * (double(busy_grid) - double(quiet_grid)));
 }
 
 // Registered with its sensor positions, the cloud lands as without them: every scan within
