@@ -53,6 +53,12 @@ void Scan::AddSensor() {
   list_sensor.assign(list_points.size(), Eigen::Vector3f::Zero());
 }
 
+bool SensorsSpread(const std::vector<Eigen::Vector3f>& sensor, double tolerance_m) {
+  for (const Eigen::Vector3f& s : sensor)
+    if ((s - sensor.front()).norm() > tolerance_m) return true;
+  return false;
+}
+
 std::size_t Scan::CountValid() const {
   return static_cast<std::size_t>(std::count(valid.begin(), valid.end(), std::uint8_t{1}));
 }

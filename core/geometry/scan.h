@@ -113,6 +113,10 @@ struct Scan {
   Status Validate() const;
 };
 
+// True when the sensor positions (Scan::sensor, list_sensor, or any such list) lie further apart than
+// `tolerance_m`: the points were seen from several places, whatever the grid says.
+bool SensorsSpread(const std::vector<Eigen::Vector3f>& sensor, double tolerance_m = 0.01);
+
 // Fills scan.angles from the valid points: the median azimuth of each column and the median
 // elevation of each row; columns/rows without a valid point are interpolated from neighbours.
 // Does nothing (returns false) for grids that are not panoramic (too few valid cells).

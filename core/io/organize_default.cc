@@ -391,7 +391,8 @@ Expected<Scan> OrganizeCloudByDensity(const std::vector<Eigen::Vector3f>& points
                             (is_rings ? " grid, one row per ring" : " uniform grid"));
   // Seen from one place, (nearly) every distinct point has a cell of its own; a cloud whose points
   // crowd each other's cells was seen from several places, and its origin is no viewpoint.
-  scan->single_viewpoint = double(best_kept) >= kRingsKept * double(distinct);
+  // Where the file gives each point's sensor position, those say it.
+  scan->single_viewpoint = double(best_kept) >= kRingsKept * double(distinct) && !SensorsSpread(sensor);
   if (best_kept < usable) {
     const std::size_t off_grid = usable - best_kept;
     const std::size_t conflicts = off_grid - std::min(off_grid, repeated);

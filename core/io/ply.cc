@@ -392,6 +392,7 @@ Expected<Scan> ReadPly(const std::filesystem::path& path, ProgressSink& progress
       if (!sensor.empty()) scan.list_sensor.push_back(sensor[k]);
     }
     if (header->obj_info.count("scanreg_angular_grid")) EstimateAngularGrid(scan);
+    if (SensorsSpread(sensor)) scan.single_viewpoint = false;  // a grid of points seen from several places
   } else {
     for (std::size_t k = 0; k < points.size(); ++k)
       if (Status s = check_finite(k); !s) return s.error();

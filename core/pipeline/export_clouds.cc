@@ -145,7 +145,7 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
       }
     }
     out.points = scan.CountPoints();
-    if (scan.HasSensor() && options.format != "ply")
+    if (scan.HasSensor() && options.format == "las")  // the other formats say it as they write (WriteScanFile)
       LogWarning(out.file.string() + ": scan '" + scan.name + "' has a sensor position per point, which " +
                  options.format + " has no field for: they are left out; export ply to keep them (x_origin y_origin "
                  "z_origin)");

@@ -170,6 +170,7 @@ Expected<io::LinkRecord> RefinePairFromPose(const Scan& parent, const Scan& chil
     HoldScan(*scans[k], &prepared[k]);
     prepared[k].samples = ToFloat(VoxelDownsample(pts, options.dense_icp.voxel_m));
     prepared[k].surface_options = options.dense_icp;
+    PrepareRays(*scans[k], evidence_m, &prepared[k]);
   }
   if (cancel.IsCancelled()) return MakeError(ErrorCode::kCancelled, "refinement cancelled");
   return RefinePair(prepared[0], prepared[1], initial, options, evidence_m, cancel);

@@ -74,6 +74,7 @@ Expected<ProjectRegistration> RegisterFromCurrentPoses(const std::vector<Scan>& 
     HoldScan(scans[i], &prepared[i]);
     prepared[i].samples = ToFloat(VoxelDownsample(pts, options.dense_icp.voxel_m));
     prepared[i].surface_options = options.dense_icp;
+    PrepareRays(scans[i], evidence_m, &prepared[i]);
     index[i] = std::make_unique<PointIndex>(ToDouble(prepared[i].samples));
   }
   result.seconds_features = Since(t_start);

@@ -136,6 +136,11 @@ void HoldScan(const Scan& scan, PreparedScan* prepared) {
   prepared->memo = std::make_shared<PreparedScan::SurfaceMemo>();
 }
 
+void PrepareRays(const Scan& scan, double evidence_m, PreparedScan* prepared) {
+  prepared->rays.reset();
+  if (scan.HasSensor() && !HasViewpoint(scan)) prepared->rays = std::make_shared<const RayFreeSpace>(scan, evidence_m);
+}
+
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared) {
   HoldScan(scan, prepared);
   const std::vector<std::uint8_t> confidence = ConfidenceMap(scan, options.reliability);
@@ -149,9 +154,7 @@ void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan*
   prepared->surface_options = options.dense_icp;
   prepared->plan = MakePlanView(prepared->geometric, scan);
   prepared->panoramic = scan.grid_from_file && FullCircle(scan.angles);
-  prepared->rays.reset();
-  if (scan.HasSensor() && !HasViewpoint(scan))
-    prepared->rays = std::make_shared<const RayFreeSpace>(scan, options.overlap_distance_m);
+  PrepareRays(scan, options.overlap_distance_m, prepared);
   std::vector<float> ranges;
   ranges.reserve(prepared->samples.size());
   for (const Eigen::Vector3f& p : prepared->samples) ranges.push_back(p.norm());

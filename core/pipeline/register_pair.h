@@ -64,8 +64,13 @@ struct PreparedScan {
 // Sets name, scan and angular step from a scan the caller keeps (and forgets any surface).
 void HoldScan(const Scan& scan, PreparedScan* prepared);
 
+// The free space along the scan's per-point rays (PreparedScan::rays) in cubes of `evidence_m` (the
+// distance EvaluateAlignment is asked with: half its margin), for a scan with sensor positions and
+// no grid viewpoint; none otherwise.
+void PrepareRays(const Scan& scan, double evidence_m, PreparedScan* prepared);
+
 // Features are detected by the caller; this holds the scan (HoldScan) and fills the keypoints' 3D
-// points, the samples and the plan view.
+// points, the samples, the plan view and the rays (PrepareRays).
 void PrepareScan(const Scan& scan, const RegisterOptions& options, PreparedScan* prepared);
 
 struct PairResult {

@@ -30,10 +30,12 @@ class RayFreeSpace {
   // The state of the cube holding p (scan frame): kSurface when a return lies in it or a cube beside
   // it (26-neighbourhood), else kFree when a ray passed through it, else kUnseen.
   Seen At(const Eigen::Vector3d& p) const;
+  bool Free(const Eigen::Vector3d& p) const;  // At(p) == kFree, the free cubes looked up first
   std::size_t Bytes() const { return (free_.capacity() + surface_.capacity()) * sizeof(std::uint64_t); }
 
  private:
   bool Has(const std::vector<std::uint64_t>& set, std::int64_t x, std::int64_t y, std::int64_t z) const;
+  bool NearSurface(std::int64_t x, std::int64_t y, std::int64_t z) const;  // a return in the cube or beside it
 
   double cell_ = 0.0;
   int rays_ = 0;

@@ -317,7 +317,7 @@ void MarkFreeSpacePoints(const Scan& observer, const Scan& other, const Eigen::I
     if (!other.valid[i] || m[i]) continue;
     const Eigen::Vector3d q = observer_from_other * other.points[i].cast<double>();
     if (rays) {
-      if (observer_rays->At(q) == RayFreeSpace::Seen::kFree) m[i] = 1;
+      if (observer_rays->Free(q)) m[i] = 1;
       continue;
     }
     double nearest = 0.0;

@@ -359,5 +359,28 @@ TEST(OrganizeDefault, RealUnorganizedCloudsKeepNearlyAllTheirPoints) {
   }
 }
 
+// A cloud whose points each find a cell (no crowding) but whose file gives sensor positions that lie
+// apart was still seen from several places: its origin is no viewpoint. The same points with one
+// sensor position for all, or none, keep theirs.
+TEST(OrganizeDefault, SensorPositionsThatLieApartSayTheCloudWasSeenFromSeveralPlaces) {
+  std::vector<Eigen::Vector3f> points, one_place, two_places;
+  for (int r = 0; r < 40; ++r)
+    for (int c = 0; c < 160; ++c) {
+      const double az = 2 * M_PI * (c + 0.5) / 160, el = (r - 20) * 0.02;
+      points.emplace_back(Eigen::Vector3f(5 * std::cos(el) * std::cos(az), 5 * std::cos(el) * std::sin(az), 5 * std::sin(el)));
+      one_place.emplace_back(0, 0, 0);
+      two_places.emplace_back(c < 80 ? 0.0f : 1.5f, 0, 0);
+    }
+  const std::vector<float> reflectance(points.size(), 0.5f);
+  for (const auto& [sensor, seen_from_one] :
+       {std::pair{std::vector<Eigen::Vector3f>{}, true}, std::pair{one_place, true}, std::pair{two_places, false}}) {
+    Expected<Scan> scan = OrganizeCloudByDensity(points, reflectance, "c", "c.ply", {}, {}, sensor);
+    ASSERT_TRUE(scan.ok()) << scan.error().ToString();
+    EXPECT_TRUE(scan->list_points.empty());  // every point has a cell
+    EXPECT_EQ(scan->single_viewpoint, seen_from_one) << sensor.size();
+    EXPECT_EQ(scan->HasSensor(), !sensor.empty());
+  }
+}
+
 }  // namespace
 }  // namespace scanreg::io
