@@ -441,8 +441,10 @@ Status WritePly(const std::filesystem::path& path, const Scan& scan, ProgressSin
   if (scan.HasColour()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   // CloudCompare's name: its PLY import reads the time as the "GpsTime" scalar field its LAS import makes.
   if (scan.HasTime()) header += "property double scalar_GpsTime\n";
-  // Where each point was measured from, in world coordinates like the points.
-  if (scan.HasSensor()) header += "property double x_origin\nproperty double y_origin\nproperty double z_origin\n";
+  // Where each point was measured from, in world coordinates like the points; CloudCompare's silent
+  // import reads "scalar_" properties as the scalar fields x_origin, y_origin, z_origin.
+  if (scan.HasSensor())
+    header += "property double scalar_x_origin\nproperty double scalar_y_origin\nproperty double scalar_z_origin\n";
   if (grid)
     header += "element range_grid " + std::to_string(scan.size()) + "\nproperty list uchar int vertex_indices\n";
   header += "end_header\n";

@@ -65,7 +65,7 @@ Status WriteScanFile(const std::filesystem::path& path, const std::vector<Scan>&
   for (const Scan& scan : scans)
     if (scan.HasSensor() && ext != ".ply")
       LogWarning(path.string() + ": scan '" + scan.name + "' has a sensor position per point, which " + ext.substr(1) +
-                 " has no field for: they are left out; write ply to keep them (x_origin y_origin z_origin)");
+                 " has no field for: they are left out; write ply to keep them (scalar_x_origin, _y_, _z_)");
   if (ext == ".ptx") return WritePtx(path, scans, progress, cancel);
   if (ext == ".e57") return WriteE57(path, scans, progress, cancel);
   if (scans.size() != 1) {

@@ -147,8 +147,7 @@ Expected<std::vector<ExportedScan>> ExportClouds(const io::Project& project, con
     out.points = scan.CountPoints();
     if (scan.HasSensor() && options.format == "las")  // the other formats say it as they write (WriteScanFile)
       LogWarning(out.file.string() + ": scan '" + scan.name + "' has a sensor position per point, which " +
-                 options.format + " has no field for: they are left out; export ply to keep them (x_origin y_origin "
-                 "z_origin)");
+                 options.format + " has no field for: they are left out; export ply to keep them (scalar_x_origin, _y_, _z_)");
     SubProgress write_progress(progress, (i + 0.5) / n, (i + 1) / n);
     written.Track(out.file);
     const Status s = options.format == "las" ? WriteScanLas(out.file, scan, static_cast<std::uint16_t>(i + 1))

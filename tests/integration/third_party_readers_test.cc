@@ -438,7 +438,7 @@ TEST(ThirdPartyReaders, EveryPointKeepsItsSensorPositionFromImportToExport) {
   pcl::PCLPointCloud2 cloud;
   ASSERT_EQ(pcl::io::loadPLYFile((*exported)[0].file.string(), cloud), 0);
   int offset[6] = {-1, -1, -1, -1, -1, -1};
-  const char* names[6] = {"x", "y", "z", "x_origin", "y_origin", "z_origin"};
+  const char* names[6] = {"x", "y", "z", "scalar_x_origin", "scalar_y_origin", "scalar_z_origin"};
   for (const auto& f : cloud.fields)
     for (int d = 0; d < 6; ++d)
       if (f.name == names[d] && f.datatype == pcl::PCLPointField::FLOAT64) offset[d] = static_cast<int>(f.offset);
