@@ -251,6 +251,64 @@ std::vector<int> Cluster(const std::vector<Eigen::Vector3d>& points, double cell
   return cluster;
 }
 
+// How a cluster of violations meets the rest of `other`'s range image (organized scans only). Per
+// violating sample and grid direction whose neighbouring sample is not in its cluster, the cells
+// between them are walked: a cell with no return, or one farther by a depth jump, is a silhouette
+// (the cluster stands in front of what lies behind it, as a vehicle or a person does); a surface
+// that runs on without a farther jump into a sample on the observer's own surface is attached (the cluster
+// is part of a larger static surface: a corridor's end wall meets its side walls, a shifted façade
+// runs on into the façade). Directions into untested samples say nothing.
+struct ClusterBoundary {
+  int silhouette = 0, attached = 0;
+};
+
+std::vector<ClusterBoundary> ClusterBoundaries(const Scan& other, const std::vector<std::size_t>& samples,
+                                               const std::vector<std::uint8_t>& state, const std::vector<int>& cluster_of_sample,
+                                               int clusters, double jump) {
+  std::vector<ClusterBoundary> out(clusters);
+  if (other.rows < 2 || other.cols < 2 || samples.size() < 2) return out;
+  // The sub-grid stride SampleIndicesAll used: the smallest row step between consecutive samples' rows.
+  int stride = other.cols;
+  for (std::size_t k = 1; k < samples.size(); ++k) {
+    const int dr = static_cast<int>(samples[k] / other.cols) - static_cast<int>(samples[k - 1] / other.cols);
+    if (dr > 0) stride = std::min(stride, dr);
+  }
+  std::unordered_map<std::size_t, int> sample_at;  // cell -> sample
+  sample_at.reserve(samples.size() * 2);
+  for (std::size_t k = 0; k < samples.size(); ++k) sample_at.emplace(samples[k], static_cast<int>(k));
+  const int dirs[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    if (state[k] != 2) continue;
+    const int cl = cluster_of_sample[k];
+    const int r0 = static_cast<int>(samples[k] / other.cols), c0 = static_cast<int>(samples[k] % other.cols);
+    for (const auto& d : dirs) {
+      const int nr = r0 + d[0] * stride;
+      if (nr < 0 || nr >= other.rows) continue;
+      const int nc = ((c0 + d[1] * stride) % other.cols + other.cols) % other.cols;
+      const auto neighbour = sample_at.find(other.Index(nr, nc));
+      if (neighbour != sample_at.end() && state[neighbour->second] == 2 && cluster_of_sample[neighbour->second] == cl) continue;
+      double previous = other.points[samples[k]].norm();
+      bool silhouette = false;
+      for (int step = 1; step <= stride && !silhouette; ++step) {
+        const int r = r0 + d[0] * step, c = ((c0 + d[1] * step) % other.cols + other.cols) % other.cols;
+        if (!other.IsValid(r, c)) {
+          silhouette = true;
+          break;
+        }
+        const double range = other.Point(r, c).norm();
+        silhouette = range > previous + jump + 0.02 * previous;
+        previous = range;
+      }
+      if (silhouette) {
+        ++out[cl].silhouette;
+      } else if (neighbour != sample_at.end() && state[neighbour->second] == 3) {
+        ++out[cl].attached;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, const Eigen::Isometry3d& observer_from_other,
@@ -260,21 +318,22 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   const bool rays = !projector.known() && observer_rays && observer_rays->known();
   if (!projector.known() && !rays) return result;
   const std::vector<std::size_t> samples = SampleIndices(other, options);
-  std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested, 2 violation
+  std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested (behind), 2 violation, 3 on the observer's surface
   std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
 #pragma omp parallel for schedule(static)
   for (long k = 0; k < static_cast<long>(samples.size()); ++k) {
     const Eigen::Vector3d q = mapped[k] = observer_from_other * other.points[samples[k]].cast<double>();
     if (rays) {
       const RayFreeSpace::Seen seen = observer_rays->At(q);
-      state[k] = seen == RayFreeSpace::Seen::kFree ? 2 : seen == RayFreeSpace::Seen::kSurface ? 1 : 0;
+      state[k] = seen == RayFreeSpace::Seen::kFree ? 2 : seen == RayFreeSpace::Seen::kSurface ? 3 : 0;
       continue;
     }
     double nearest = 0.0;
     if (!NearestAround(observer, projector, q, &nearest)) continue;
-    state[k] = nearest > q.norm() + options.margin_m ? 2 : 1;
+    state[k] = nearest > q.norm() + options.margin_m ? 2 : nearest >= q.norm() - options.margin_m ? 3 : 1;
   }
   std::vector<Eigen::Vector3d> violating;
+  std::vector<std::size_t> violating_sample;
   Eigen::AlignedBox3d extent;
   extent.setEmpty();
   for (std::size_t k = 0; k < samples.size(); ++k) {
@@ -282,14 +341,21 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
     const Eigen::Vector3d& q = mapped[k];
     extent.extend(q);
     ++result.tested;
-    if (state[k] == 2) violating.push_back(q);
+    if (state[k] == 2) violating.push_back(q), violating_sample.push_back(k);
   }
   result.violations = static_cast<int>(violating.size());
   if (violating.empty() || !(options.cluster_cell_m > 0.0)) return result;
   std::vector<Eigen::AlignedBox3d> boxes;
   const std::vector<int> cluster = Cluster(violating, options.cluster_cell_m, &boxes);
+  std::vector<int> cluster_of_sample(samples.size(), -1);
+  for (std::size_t v = 0; v < violating_sample.size(); ++v) cluster_of_sample[violating_sample[v]] = cluster[v];
+  const std::vector<ClusterBoundary> boundary =
+      ClusterBoundaries(other, samples, state, cluster_of_sample, static_cast<int>(boxes.size()), options.margin_m);
   const double max_size = std::min(options.max_object_m, options.max_object_share * extent.diagonal().norm());
-  for (int c : cluster) result.moving += boxes[c].diagonal().norm() <= max_size ? 1 : 0;
+  for (int c : cluster) {
+    const bool attached = boundary[c].attached >= std::max(2, boundary[c].silhouette);
+    result.moving += boxes[c].diagonal().norm() <= max_size && !attached ? 1 : 0;
+  }
   if (result.moving_fraction() > options.max_moving) result.moving = 0;  // not traffic: everything moved
   return result;
 }

@@ -19,10 +19,12 @@ namespace scanreg {
 //
 // Moving objects (vehicles, people) are where one scanner saw a surface and the other saw through:
 // at the correct pose they violate too. They are told apart by shape: the violations are grouped
-// into connected clusters, and a cluster no larger than a vehicle (and small against the scene) is
-// counted as `moving`, not against the pose. A wrong pose moves static surfaces (façades, the
-// street's ends, every object at once) into free space: large clusters, or more than a street's
-// worth of traffic. Limitation: a pose shifted along a street of identical flat façades, where
+// into connected clusters, and a cluster no larger than a vehicle (and small against the scene) that
+// stands out of `other`'s range image — its boundary mostly a jump to something farther, or to no
+// return — is counted as `moving`, not against the pose. A wrong pose moves static surfaces (façades,
+// the street's ends, every object at once) into free space: large clusters, clusters attached to
+// surfaces the observer confirms (a corridor's end wall, object-sized, meets the side walls without a
+// depth jump), or more than a street's worth of traffic. Limitation: a pose shifted along a street of identical flat façades, where
 // only object-sized things (posts, parked cars) conflict, looks like traffic here; it still
 // conflicts more than the true pose (PairFreeSpace::total), which ranks the candidate poses, and
 // the correspondences, rival poses and loop checks must catch it.
