@@ -1,6 +1,7 @@
 #include "core/pipeline/project_edits.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <vector>
 
@@ -10,6 +11,37 @@
 
 namespace scanreg::pipeline {
 using io::IsTreeLink;
+
+namespace {
+
+// `text` with every whole-word `from` (not inside a longer name: s1 is not in s10) made `to`.
+std::string ReplaceName(const std::string& text, const std::string& from, const std::string& to) {
+  const auto name_char = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; };
+  std::string out;
+  std::size_t at = 0;
+  for (std::size_t k = text.find(from); k != std::string::npos; k = text.find(from, k + 1)) {
+    const std::size_t end = k + from.size();
+    if (k < at || (k > 0 && name_char(text[k - 1])) || (end < text.size() && name_char(text[end]))) continue;
+    out += text.substr(at, k - at) + to;
+    at = end;
+  }
+  return out + text.substr(at);
+}
+
+// Whether `text` names `scan` as a whole word.
+bool Names(const std::string& text, const std::string& scan) { return ReplaceName(text, scan, "") != text; }
+
+// A scan left "not verified" because it was placed through `through`, which is registered now:
+// its reason says so and what to do, instead of calling `through` not verified (issue 33).
+void ScansPlacedThroughAreNowPlaceable(const std::string& through, io::Project& project) {
+  const std::string stale = "not verified: placed through " + through + ", which is not verified";
+  for (io::ProjectScan& ps : project.scans)
+    if (!ps.registered && ps.unregistered_reason == stale)
+      ps.unregistered_reason = "not verified: placed through " + through + " when " + through +
+                               " was not verified; it is registered now: register again to place " + ps.name;
+}
+
+}  // namespace
 
 Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   const int p = project.FindScan(link.parent), c = project.FindScan(link.child);
@@ -93,6 +125,8 @@ Status ApplyPairResult(const io::LinkRecord& link, io::Project& project) {
   added.user_rejected = false;
   added.user_accepted = true;  // the user chose it: kept by later registrations
   links.push_back(added);
+  for (int i : moved) ScansPlacedThroughAreNowPlaceable(project.scans[i].name, project);
+  ScansPlacedThroughAreNowPlaceable(link.child, project);
   return Status::Ok();
 }
 
@@ -239,6 +273,12 @@ Expected<std::vector<std::string>> RemoveScan(const std::string& scan, io::Proje
   project.targets.erase(std::remove_if(project.targets.begin(), project.targets.end(),
                                        [&](const io::TargetRecord& t) { return t.scan == scan; }),
                         project.targets.end());
+  // A scan left out of the registration for a reason that names the removed scan: the reason no
+  // longer holds, and says so.
+  for (io::ProjectScan& p : project.scans)
+    if (!p.registered && Names(p.unregistered_reason, scan))
+      p.unregistered_reason = "its registration went through " + scan + ", which was removed from the project; register "
+                              "again to place " + p.name;
   return orphans;
 }
 
@@ -267,6 +307,9 @@ Status RenameScan(const std::string& scan, const std::string& new_name, io::Proj
     if (n == scan) n = new_name;
   for (io::TargetRecord& t : project.targets)
     if (t.scan == scan) t.scan = new_name;
+  // The reasons name scans too (a loop, a twin, the scan a weak link came from).
+  for (io::LinkRecord& l : project.links) l.reason = ReplaceName(l.reason, scan, new_name);
+  for (io::ProjectScan& p : project.scans) p.unregistered_reason = ReplaceName(p.unregistered_reason, scan, new_name);
   return Status::Ok();
 }
 

@@ -246,13 +246,12 @@ class Walker {
     if (needs_loop && (book_.At(parent, child).needs_loop || !lone)) {
       const std::string why = book_.At(parent, child).link.reason;
       const auto [alike, twin] = AlikeScan(parent, child);
-      const std::string twin_note =
-          twin >= 0 && !book_.At(parent, child).NeedsLoop()
-              ? "; " + scans_[alike].name + " looks the same from the spot of " + scans_[twin].name +
-                    " (a repeated room or corridor)"
-              : std::string();
-      book_.Fail(parent, child,
-                 why.substr(0, why.find("; a loop")) + twin_note + "; no loop through another scan confirms it");
+      std::string reason = why.substr(0, why.find("; a loop"));
+      const auto add = [&reason](const std::string& part) { reason += (reason.empty() ? "" : "; ") + part; };
+      if (twin >= 0 && !book_.At(parent, child).NeedsLoop())
+        add(scans_[alike].name + " looks the same from the spot of " + scans_[twin].name + " (a repeated room or corridor)");
+      add("no loop through another scan confirms it");
+      book_.Fail(parent, child, reason);
       book_.At(parent, child).unconfirmed = true;
       return true;
     }

@@ -177,5 +177,40 @@ TEST(ApplyPairResult, ALinkReplacesAManualPose) {
   EXPECT_FALSE(p.scans[3].manual_pose);
 }
 
+// The reasons a scan was left out name other scans: they follow a rename (whole names only: s1 is
+// not in s10), say so when the scan they name is removed, and stop calling a scan "not verified"
+// once the user has placed it (issue 33).
+TEST(ScanReasons, FollowRenamesRemovalsAndTheUsersPlacement) {
+  io::Project p = Tree();
+  io::ProjectScan s10 = p.scans[4];
+  s10.name = "s10";
+  s10.unregistered_reason = "link to s1 failed: loop s1-s10-s2 does not close";
+  p.scans.push_back(s10);
+  p.scans[4].unverified = true;
+  p.scans[4].unregistered_reason = "not verified: placed only by a weak link from s1 (small overlap)";
+  p.links[3].reason = "loop s4-s3-s1 does not close; s10 was checked";
+  ASSERT_TRUE(RenameScan("s1", "north", p).ok());
+  EXPECT_EQ(p.scans[4].unregistered_reason, "not verified: placed only by a weak link from north (small overlap)");
+  EXPECT_EQ(p.scans[5].unregistered_reason, "link to north failed: loop north-s10-s2 does not close");
+  EXPECT_EQ(p.links[3].reason, "loop s4-s3-north does not close; s10 was checked");
+
+  // s3 not verified, s5 placed through it: the user places s3 by a pair result.
+  p.scans[2].registered = false;
+  p.scans[2].unverified = true;
+  p.scans[2].unregistered_reason = "not verified: placed only by a weak link from s2 (small overlap)";
+  p.scans[4].unregistered_reason = "not verified: placed through s3, which is not verified";
+  ASSERT_TRUE(ApplyPairResult(Link(p, "s2", "s3"), p).ok());
+  EXPECT_TRUE(p.scans[2].registered);
+  EXPECT_FALSE(p.scans[4].registered);
+  EXPECT_EQ(p.scans[4].unregistered_reason.find("which is not verified"), std::string::npos) << p.scans[4].unregistered_reason;
+  EXPECT_NE(p.scans[4].unregistered_reason.find("register again to place s5"), std::string::npos)
+      << p.scans[4].unregistered_reason;
+
+  // s2 removed: the reason of s10 that named it says it went.
+  ASSERT_TRUE(RemoveScan("s2", p).ok());
+  const io::ProjectScan& left = p.scans[p.FindScan("s10")];
+  EXPECT_NE(left.unregistered_reason.find("s2, which was removed"), std::string::npos) << left.unregistered_reason;
+}
+
 }  // namespace
 }  // namespace scanreg::pipeline
