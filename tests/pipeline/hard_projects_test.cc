@@ -178,8 +178,12 @@ void ExpectMostRegisteredAndNoWrongLink(const Hard& h, int min_registered) {
   }
 }
 
+// Seed 7: the plan-view links between three stations and the rest all fit to 2 mm and carry 2-9 %
+// traffic in each other's free space; while object-sized conflicts made a plan-view pose need a
+// loop, and the one link between the two groups had none, 3 of 6 were registered. Conflicts that
+// stand out of the other scan's range image are traffic (visibility.h): every scan, none wrong.
 TEST(HardProjects, BusyStreetTwelveMetresApartByThePlanView) {
-  for (const std::uint64_t seed : {3u, 5u}) ExpectMostRegisteredAndNoWrongLink({6, 1000, 250, 12.0, true, seed, 6}, 5);
+  for (const std::uint64_t seed : {3u, 5u, 7u}) ExpectMostRegisteredAndNoWrongLink({6, 1000, 250, 12.0, true, seed, 6}, 6);
 }
 
 // The same street with stations tilted up to 5° (no compensator): the 6-DoF estimator's turn.
