@@ -158,35 +158,37 @@ bool AtDepthEdge(const Scan& scan, int r, int c, double jump) {
 
 // Indices of `other`'s valid points to test: every k-th row and column of an organized scan (so the
 // samples cover surfaces evenly in both directions) away from depth edges, evenly spaced indices
-// otherwise.
-std::vector<std::size_t> SampleIndicesAll(const Scan& other, int max_samples, double edge_jump) {
+// otherwise. `stride` receives the sub-grid's step (0 for a list). Ascending indices either way.
+std::vector<std::size_t> SampleIndicesAll(const Scan& other, int max_samples, double edge_jump, int* stride) {
   std::size_t valid = 0;
   for (std::size_t i = 0; i < other.size(); ++i) valid += other.valid[i] ? 1 : 0;
   const std::size_t wanted = static_cast<std::size_t>(std::max(max_samples, 1));
   std::vector<std::size_t> out;
   if (other.rows > 1 && other.cols > 1) {
     const int k = std::max(1, static_cast<int>(std::ceil(std::sqrt(double(valid) / double(wanted)))));
+    *stride = k;
     for (int r = 0; r < other.rows; r += k)
       for (int c = 0; c < other.cols; c += k)
         if (other.IsValid(r, c) && !AtDepthEdge(other, r, c, edge_jump)) out.push_back(other.Index(r, c));
     return out;
   }
-  const double stride = std::max(1.0, double(valid) / double(wanted));
+  *stride = 0;
+  const double step = std::max(1.0, double(valid) / double(wanted));
   double next = 0.0;
   std::size_t seen = 0;
   for (std::size_t i = 0; i < other.size(); ++i) {
     if (!other.valid[i]) continue;
     if (double(seen++) >= next) {
       out.push_back(i);
-      next += stride;
+      next += step;
     }
   }
   return out;
 }
 
 // Sample indices without the near field (FreeSpaceOptions::near_field_m).
-std::vector<std::size_t> SampleIndices(const Scan& other, const FreeSpaceOptions& options) {
-  std::vector<std::size_t> all = SampleIndicesAll(other, options.max_samples, options.margin_m);
+std::vector<std::size_t> SampleIndices(const Scan& other, const FreeSpaceOptions& options, int* stride) {
+  std::vector<std::size_t> all = SampleIndicesAll(other, options.max_samples, options.margin_m, stride);
   if (all.empty()) return all;
   std::vector<float> ranges;
   ranges.reserve(all.size());
@@ -251,7 +253,8 @@ std::vector<int> Cluster(const std::vector<Eigen::Vector3d>& points, double cell
   return cluster;
 }
 
-// How a cluster of violations meets the rest of `other`'s range image (organized scans only). Per
+// How a cluster of violations meets the rest of `other`'s range image (organized scans, sampled every
+// `stride` cells by SampleIndices; nothing for a list). Per
 // violating sample and grid direction whose neighbouring sample is not in its cluster, the cells
 // between them are walked: a cell with no return, or one farther by a depth jump, is a silhouette
 // (the cluster stands in front of what lies behind it, as a vehicle or a person does); a surface
@@ -262,20 +265,15 @@ struct ClusterBoundary {
   int silhouette = 0, attached = 0;
 };
 
-std::vector<ClusterBoundary> ClusterBoundaries(const Scan& other, const std::vector<std::size_t>& samples,
+std::vector<ClusterBoundary> ClusterBoundaries(const Scan& other, const std::vector<std::size_t>& samples, int stride,
                                                const std::vector<std::uint8_t>& state, const std::vector<int>& cluster_of_sample,
                                                int clusters, double jump) {
   std::vector<ClusterBoundary> out(clusters);
-  if (other.rows < 2 || other.cols < 2 || samples.size() < 2) return out;
-  // The sub-grid stride SampleIndicesAll used: the smallest row step between consecutive samples' rows.
-  int stride = other.cols;
-  for (std::size_t k = 1; k < samples.size(); ++k) {
-    const int dr = static_cast<int>(samples[k] / other.cols) - static_cast<int>(samples[k - 1] / other.cols);
-    if (dr > 0) stride = std::min(stride, dr);
-  }
-  std::unordered_map<std::size_t, int> sample_at;  // cell -> sample
-  sample_at.reserve(samples.size() * 2);
-  for (std::size_t k = 0; k < samples.size(); ++k) sample_at.emplace(samples[k], static_cast<int>(k));
+  if (stride < 1) return out;
+  const auto sample_at = [&samples](std::size_t cell) {  // the sample on that cell, or -1 (samples ascend)
+    const auto it = std::lower_bound(samples.begin(), samples.end(), cell);
+    return it != samples.end() && *it == cell ? static_cast<int>(it - samples.begin()) : -1;
+  };
   const int dirs[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
   for (std::size_t k = 0; k < samples.size(); ++k) {
     if (state[k] != 2) continue;
@@ -285,8 +283,8 @@ std::vector<ClusterBoundary> ClusterBoundaries(const Scan& other, const std::vec
       const int nr = r0 + d[0] * stride;
       if (nr < 0 || nr >= other.rows) continue;
       const int nc = ((c0 + d[1] * stride) % other.cols + other.cols) % other.cols;
-      const auto neighbour = sample_at.find(other.Index(nr, nc));
-      if (neighbour != sample_at.end() && state[neighbour->second] == 2 && cluster_of_sample[neighbour->second] == cl) continue;
+      const int neighbour = sample_at(other.Index(nr, nc));
+      if (neighbour >= 0 && state[neighbour] == 2 && cluster_of_sample[neighbour] == cl) continue;
       double previous = other.points[samples[k]].norm();
       bool silhouette = false;
       for (int step = 1; step <= stride && !silhouette; ++step) {
@@ -301,7 +299,7 @@ std::vector<ClusterBoundary> ClusterBoundaries(const Scan& other, const std::vec
       }
       if (silhouette) {
         ++out[cl].silhouette;
-      } else if (neighbour != sample_at.end() && state[neighbour->second] == 3) {
+      } else if (neighbour >= 0 && state[neighbour] == 3) {
         ++out[cl].attached;
       }
     }
@@ -317,7 +315,8 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   const GridProjector projector(observer);
   const bool rays = !projector.known() && observer_rays && observer_rays->known();
   if (!projector.known() && !rays) return result;
-  const std::vector<std::size_t> samples = SampleIndices(other, options);
+  int stride = 0;
+  const std::vector<std::size_t> samples = SampleIndices(other, options, &stride);
   std::vector<std::uint8_t> state(samples.size(), 0);  // 1 tested (behind), 2 violation, 3 on the observer's surface
   std::vector<Eigen::Vector3d> mapped(samples.size());  // in the observer's frame
 #pragma omp parallel for schedule(static)
@@ -350,7 +349,7 @@ FreeSpaceResult FreeSpaceViolations(const Scan& observer, const Scan& other, con
   std::vector<int> cluster_of_sample(samples.size(), -1);
   for (std::size_t v = 0; v < violating_sample.size(); ++v) cluster_of_sample[violating_sample[v]] = cluster[v];
   const std::vector<ClusterBoundary> boundary =
-      ClusterBoundaries(other, samples, state, cluster_of_sample, static_cast<int>(boxes.size()), options.margin_m);
+      ClusterBoundaries(other, samples, stride, state, cluster_of_sample, static_cast<int>(boxes.size()), options.margin_m);
   const double max_size = std::min(options.max_object_m, options.max_object_share * extent.diagonal().norm());
   for (int c : cluster) {
     const bool attached = boundary[c].attached >= std::max(2, boundary[c].silhouette);
