@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/registration/cell_search.h"
 #include "core/registration/data_scale.h"
 #include "core/registration/voxel_filter.h"
 
@@ -130,12 +131,16 @@ bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, do
     const Eigen::Vector3f q = (samples[i] - origin).cast<float>();
     (*cloud)[i] = pcl::PointXYZ(q.x(), q.y(), q.z());
   }
-  auto tree = pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  // Neighbours from cells one search radius wide: the k-d tree's neighbours, found faster.
+  const double normal_radius = options.normal_radius_voxels * voxel_m, feature_radius = options.feature_radius_voxels * voxel_m;
+  // (Cells a hair wider than the radius: a neighbour is never more than one cell away.)
+  const auto normal_search = pcl::make_shared<CellSearch>(normal_radius * (1 + 1e-4));
+  const auto feature_search = pcl::make_shared<CellSearch>(feature_radius * (1 + 1e-4));
   auto normals = pcl::make_shared<pcl::PointCloud<pcl::Normal>>();
   pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(cloud);
-  ne.setSearchMethod(tree);
-  ne.setRadiusSearch(options.normal_radius_voxels * voxel_m);
+  ne.setSearchMethod(normal_search);
+  ne.setRadiusSearch(normal_radius);
   // Normals face the scanner (the scan frame's origin), as PCL's viewpoint convention.
   const Eigen::Vector3f viewpoint = (-origin).cast<float>();
   ne.setViewPoint(viewpoint.x(), viewpoint.y(), viewpoint.z());
@@ -145,8 +150,8 @@ bool DescribeScale(const std::vector<Eigen::Vector3d>& valid, double voxel_m, do
   pcl::FPFHEstimationOMP<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fe;
   fe.setInputCloud(cloud);
   fe.setInputNormals(normals);
-  fe.setSearchMethod(tree);
-  fe.setRadiusSearch(options.feature_radius_voxels * voxel_m);
+  fe.setSearchMethod(feature_search);
+  fe.setRadiusSearch(feature_radius);
   pcl::PointCloud<pcl::FPFHSignature33> fpfh;
   fe.compute(fpfh);
   if (cancel.IsCancelled()) return false;
