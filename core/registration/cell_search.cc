@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
 
 namespace scanreg {
 namespace {
@@ -55,12 +54,10 @@ void CellSearch::setInputCloud(const PointCloudConstPtr& cloud, const IndicesCon
   slot_begin_.clear();
   slot_end_.clear();
   if (!cloud) return;
-  std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t, int>> keyed;
+  std::vector<std::pair<Key, int>> keyed;  // each finite point's cell, then its index
   const auto add = [&](int i) {
     const pcl::PointXYZ& p = (*cloud)[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return;
-    const Key k = KeyOf(p.x, p.y, p.z);
-    keyed.emplace_back(k.x, k.y, k.z, i);
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) keyed.emplace_back(KeyOf(p.x, p.y, p.z), i);
   };
   if (indices) {
     for (int i : *indices) add(i);
@@ -68,29 +65,23 @@ void CellSearch::setInputCloud(const PointCloudConstPtr& cloud, const IndicesCon
     for (int i = 0; i < static_cast<int>(cloud->size()); ++i) add(i);
   }
   std::sort(keyed.begin(), keyed.end());
-  std::size_t cells = 0;
-  for (std::size_t k = 0; k < keyed.size(); ++k) {
-    order_.push_back(std::get<3>(keyed[k]));
-    cells += k == 0 || std::get<0>(keyed[k]) != std::get<0>(keyed[k - 1]) || std::get<1>(keyed[k]) != std::get<1>(keyed[k - 1]) ||
-             std::get<2>(keyed[k]) != std::get<2>(keyed[k - 1]);
-  }
+  // At most half full whatever the number of cells (at most one a point).
   std::size_t capacity = 64;
-  while (capacity < 2 * cells) capacity <<= 1;
+  while (capacity < 2 * keyed.size()) capacity <<= 1;
   mask_ = capacity - 1;
   slot_key_.assign(capacity, Key{});
   slot_begin_.assign(capacity, 0);
   slot_end_.assign(capacity, 0);
+  for (const auto& [key, i] : keyed) order_.push_back(i);
   for (std::size_t begin = 0; begin < keyed.size();) {
+    const Key key = keyed[begin].first;
     std::size_t end = begin + 1;
-    while (end < keyed.size() && std::get<0>(keyed[end]) == std::get<0>(keyed[begin]) &&
-           std::get<1>(keyed[end]) == std::get<1>(keyed[begin]) && std::get<2>(keyed[end]) == std::get<2>(keyed[begin]))
-      ++end;
-    const Key key{std::get<0>(keyed[begin]), std::get<1>(keyed[begin]), std::get<2>(keyed[begin])};
-    std::size_t i = Slot(key);
-    while (slot_begin_[i] != slot_end_[i]) i = (i + 1) & mask_;
-    slot_key_[i] = key;
-    slot_begin_[i] = static_cast<std::uint32_t>(begin);
-    slot_end_[i] = static_cast<std::uint32_t>(end);
+    while (end < keyed.size() && keyed[end].first == key) ++end;
+    std::size_t slot = Slot(key);
+    while (slot_begin_[slot] != slot_end_[slot]) slot = (slot + 1) & mask_;
+    slot_key_[slot] = key;
+    slot_begin_[slot] = static_cast<std::uint32_t>(begin);
+    slot_end_[slot] = static_cast<std::uint32_t>(end);
     begin = end;
   }
 }
@@ -140,10 +131,11 @@ int CellSearch::nearestKSearch(const pcl::PointXYZ& point, int k, pcl::Indices& 
     // Beyond as many cells as points, every point at once.
     const double cube = std::pow(2.0 * reach + 1.0, 3);
     const bool everything = cube > static_cast<double>(order_.size());
-    if (!everything) Collect(point, std::numeric_limits<float>::infinity(), reach, &found);
     if (everything) {
       found.clear();
       for (int i : order_) found.emplace_back(SquaredDistance(point, (*input_)[i]), i);
+    } else {
+      Collect(point, std::numeric_limits<float>::infinity(), reach, &found);
     }
     if (static_cast<int>(found.size()) < want && !everything) continue;
     std::partial_sort(found.begin(), found.begin() + want, found.end());

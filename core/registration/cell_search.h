@@ -29,6 +29,7 @@ class CellSearch : public pcl::search::Search<pcl::PointXYZ> {
   struct Key {
     std::int32_t x = 0, y = 0, z = 0;
     bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+    bool operator<(const Key& o) const { return x != o.x ? x < o.x : y != o.y ? y < o.y : z < o.z; }
   };
   Key KeyOf(float x, float y, float z) const;
   // The points of one cell: [begin, end) in order_, or an empty range.
